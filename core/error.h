@@ -1,0 +1,52 @@
+// Error type for bad input, and the checks used for invariants.
+#pragma once
+
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace reliefsim {
+
+/// Thrown by library code for bad input (files, parameters, options). Only main() prints it.
+/// Message format: "subject: problem; expected/valid set; hint".
+class Error : public std::runtime_error {
+public:
+    explicit Error(const std::string& message) : std::runtime_error(message) {}
+};
+
+namespace detail {
+template <typename A, typename B>
+[[noreturn]] void CheckFailed(const char* file, int line, const char* expr, const A& a,
+                              const B& b) {
+    std::ostringstream s;
+    s << file << ":" << line << ": check failed: " << expr << " (" << a << " vs " << b << ")";
+    std::fprintf(stderr, "%s\n", s.str().c_str());
+    std::abort();
+}
+}  // namespace detail
+
+}  // namespace reliefsim
+
+#define RS_CHECK(cond)                                                               \
+    do {                                                                             \
+        if (!(cond)) {                                                               \
+            std::fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #cond); \
+            std::abort();                                                            \
+        }                                                                            \
+    } while (0)
+
+#define RS_CHECK_OP(a, op, b)                                                            \
+    do {                                                                                 \
+        if (!((a)op(b))) ::reliefsim::detail::CheckFailed(__FILE__, __LINE__, #a " " #op " " #b, (a), (b)); \
+    } while (0)
+#define RS_CHECK_EQ(a, b) RS_CHECK_OP(a, ==, b)
+#define RS_CHECK_LE(a, b) RS_CHECK_OP(a, <=, b)
+#define RS_CHECK_LT(a, b) RS_CHECK_OP(a, <, b)
+
+#ifdef NDEBUG
+#define RS_DCHECK(cond) ((void)0)
+#else
+#define RS_DCHECK(cond) RS_CHECK(cond)
+#endif

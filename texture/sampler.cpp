@@ -1,0 +1,28 @@
+// Names of sampler enums.
+#include "texture/sampler.h"
+
+namespace reliefsim {
+
+std::string_view ToString(Filter f) {
+    switch (f) {
+        case Filter::Nearest: return "nearest";
+        case Filter::Bilinear: return "bilinear";
+        case Filter::Min4: return "min4";
+    }
+    return "?";
+}
+std::string_view ToString(WrapMode w) { return w == WrapMode::Clamp ? "clamp" : "repeat"; }
+
+std::optional<Filter> ParseFilter(std::string_view s) {
+    if (s == "nearest") return Filter::Nearest;
+    if (s == "bilinear") return Filter::Bilinear;
+    if (s == "min4") return Filter::Min4;
+    return std::nullopt;
+}
+std::optional<WrapMode> ParseWrapMode(std::string_view s) {
+    if (s == "repeat") return WrapMode::Repeat;
+    if (s == "clamp") return WrapMode::Clamp;
+    return std::nullopt;
+}
+
+}  // namespace reliefsim
