@@ -1,0 +1,33 @@
+// The reliefsim subcommands: each registers itself on the root CLI11 app.
+#pragma once
+
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "texture/height_field.h"
+
+namespace reliefsim {
+
+/// The height-map options shared by every command that reads a map.
+struct MapOptions {
+    std::string map = "builtin:shapes";  ///< file path or builtin:NAME[:SIZE]
+    std::string channel = "auto";        ///< R|G|B|A|auto
+    std::string stores = "height";       ///< height|depth
+};
+
+/// Adds --map, --map-channel, --map-stores to a subcommand.
+void AddMapOptions(CLI::App* cmd, MapOptions& options);
+
+/// Loads the map the options name; throws Error on any problem.
+HeightField LoadMapFromOptions(const MapOptions& options);
+
+// Each Register*Command adds one subcommand whose callback does the work and throws
+// reliefsim::Error on bad input (main() prints it and exits non-zero).
+void RegisterMethodsCommand(CLI::App& root);
+void RegisterRenderCommand(CLI::App& root);
+void RegisterSummaryCommand(CLI::App& root);
+void RegisterMapsCommand(CLI::App& root);      // app/cmd_maps.cpp (issue #3)
+void RegisterGlCompareCommand(CLI::App& root); // app/cmd_glcompare.cpp (issue #4)
+
+}  // namespace reliefsim
