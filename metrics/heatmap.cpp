@@ -1,0 +1,494 @@
+// Heatmap PNGs with a fixed-range legend, colour PNGs and multi-channel EXRs.
+#include "metrics/heatmap.h"
+
+#include <OpenImageIO/imagebuf.h>
+#include <OpenImageIO/imagebufalgo.h>
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <set>
+#include <system_error>
+
+#include "core/error.h"
+
+namespace OIIO = OIIO_NAMESPACE;
+
+namespace reliefsim {
+namespace {
+
+constexpr const char* kFontPath = "/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf";
+constexpr int kMinHeightForRightLegend = 128;  // shorter images get the legend below
+constexpr int kBelowLegendHeight = 160;        // panel height when placed below
+constexpr float kMaskGrey = 40.0f / 255.0f;  // masked / NaN pixels, exactly 40 in 8 bits
+constexpr const char* kColormapNames =
+    "\"inferno\", \"viridis\", \"magma\", \"plasma\", \"turbo\", \"blue-red\", "
+    "\"spectrum\", \"heat\"";
+constexpr const char* kChannelOrderAttr = "reliefsim:channelOrder";
+
+std::string Quote(const std::string& s) { return "\"" + s + "\""; }
+
+/// Writes through `write(tmpPath)` and renames the result onto `path`. On any failure
+/// the temporary file is removed and Error is thrown, so `path` is either the complete
+/// new file or untouched. `write` returns an empty string on success, else the reason.
+template <typename WriteFn>
+void AtomicWrite(const std::string& what, const std::string& path, WriteFn&& write) {
+    const std::string tmpPath = path + ".tmp";
+    std::error_code ec;
+    const std::string reason = write(tmpPath);
+    if (!reason.empty()) {
+        std::filesystem::remove(tmpPath, ec);
+        throw Error(what + " " + Quote(path) + ": cannot write (" + reason +
+                    "); expected a writable file in an existing directory; hint: create "
+                    "the output directory first");
+    }
+    std::filesystem::rename(tmpPath, path, ec);
+    if (ec) {
+        std::error_code ignored;
+        std::filesystem::remove(tmpPath, ignored);
+        throw Error(
+            what + " " + Quote(path) + ": cannot rename " + Quote(tmpPath) +
+            " onto it (" + ec.message() +
+            "); expected a writable destination; hint: check that the path is not "
+            "a directory");
+    }
+}
+
+/// Writes float pixels (spec.nchannels interleaved, row 0 at the top) to `tmpPath` in the
+/// given OIIO format, converting to spec.format. Returns "" on success, else the reason.
+std::string WriteImageFile(const std::string& tmpPath, const char* format,
+                           const OIIO::ImageSpec& spec, const float* pixels) {
+    auto out = OIIO::ImageOutput::create(format);
+    if (!out) return "no " + std::string(format) + " writer: " + OIIO::geterror();
+    if (!out->open(tmpPath, spec)) {
+        std::string err = out->geterror();
+        return err.empty() ? OIIO::geterror() : err;
+    }
+    const bool ok = out->write_image(OIIO::TypeDesc::FLOAT, pixels);
+    std::string err = ok ? std::string() : out->geterror();
+    if (!out->close() && err.empty()) err = out->geterror();
+    if (!ok && err.empty()) err = "write_image failed";
+    return err;
+}
+
+void CheckSize(const std::string& what, const std::string& path, int width, int height) {
+    if (width <= 0 || height <= 0)
+        throw Error(what + " " + Quote(path) + ": size " + std::to_string(width) + "x" +
+                    std::to_string(height) +
+                    " is empty; expected width > 0 and height > 0");
+}
+
+// ---- Text ----------------------------------------------------------------------------
+
+/// The TrueType font used for legend text, or "" when none can be loaded (then tick
+/// labels use the bitmap font below). Probed once per process.
+const std::string& LegendFont() {
+    static const std::string font = [] {
+        std::string found;
+        for (const char* candidate : {kFontPath, "DejaVuSans", ""}) {
+            if (OIIO::ImageBufAlgo::text_size("0.5", 12, candidate).defined()) {
+                found = candidate[0] ? candidate : "<default>";
+                break;
+            }
+        }
+        OIIO::geterror();  // clear the errors of failed candidates
+        return found;
+    }();
+    return font;
+}
+
+/// OIIO font argument for LegendFont() ("<default>" means OIIO's own search).
+std::string FontArg() {
+    const std::string& f = LegendFont();
+    return f == "<default>" ? std::string() : f;
+}
+
+/// 5x7 bitmap glyphs for the characters a number needs, one byte per row, bit 4 = left.
+struct Glyph {
+    char c;
+    std::array<uint8_t, 7> rows;
+};
+constexpr Glyph kGlyphs[] = {
+    {'0', {0x0E, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0E}},
+    {'1', {0x04, 0x0C, 0x04, 0x04, 0x04, 0x04, 0x0E}},
+    {'2', {0x0E, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1F}},
+    {'3', {0x1F, 0x02, 0x04, 0x02, 0x01, 0x11, 0x0E}},
+    {'4', {0x02, 0x06, 0x0A, 0x12, 0x1F, 0x02, 0x02}},
+    {'5', {0x1F, 0x10, 0x1E, 0x01, 0x01, 0x11, 0x0E}},
+    {'6', {0x06, 0x08, 0x10, 0x1E, 0x11, 0x11, 0x0E}},
+    {'7', {0x1F, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08}},
+    {'8', {0x0E, 0x11, 0x11, 0x0E, 0x11, 0x11, 0x0E}},
+    {'9', {0x0E, 0x11, 0x11, 0x0F, 0x01, 0x02, 0x0C}},
+    {'.', {0x00, 0x00, 0x00, 0x00, 0x00, 0x0C, 0x0C}},
+    {'-', {0x00, 0x00, 0x00, 0x1F, 0x00, 0x00, 0x00}},
+    {'+', {0x00, 0x04, 0x04, 0x1F, 0x04, 0x04, 0x00}},
+    {'e', {0x00, 0x00, 0x0E, 0x11, 0x1F, 0x10, 0x0E}},
+};
+
+int BitmapScale(int fontSize) { return std::max(1, fontSize / 9); }
+
+/// An RGB float canvas (row 0 at the top) that the legend is drawn into.
+struct Canvas {
+    int width = 0, height = 0;
+    std::vector<float> px;  // 3 floats per pixel
+
+    Canvas(int w, int h) : width(w), height(h), px(size_t(w) * size_t(h) * 3, 1.0f) {}
+    void Set(int x, int y, float r, float g, float b) {
+        if (x < 0 || y < 0 || x >= width || y >= height) return;
+        float* p = &px[(size_t(y) * size_t(width) + size_t(x)) * 3];
+        p[0] = r;
+        p[1] = g;
+        p[2] = b;
+    }
+    OIIO::ImageBuf Wrap() {
+        return OIIO::ImageBuf(OIIO::ImageSpec(width, height, 3, OIIO::TypeDesc::FLOAT),
+                              px.data());
+    }
+};
+
+/// Width in pixels of `text` at `fontSize`.
+int TextWidth(const std::string& text, int fontSize) {
+    if (LegendFont().empty()) return int(text.size()) * 6 * BitmapScale(fontSize);
+    OIIO::ROI r = OIIO::ImageBufAlgo::text_size(text, fontSize, FontArg());
+    return r.defined() ? r.width() : int(text.size()) * fontSize;
+}
+
+/// Draws black `text` with its left edge at x, vertically centred on y.
+void DrawText(Canvas& canvas, int x, int y, const std::string& text, int fontSize) {
+    if (!LegendFont().empty()) {
+        OIIO::ImageBuf buf = canvas.Wrap();
+        const float black[3] = {0.0f, 0.0f, 0.0f};
+        if (OIIO::ImageBufAlgo::render_text(buf, x, y, text, fontSize, FontArg(), black,
+                                            OIIO::ImageBufAlgo::TextAlignX::Left,
+                                            OIIO::ImageBufAlgo::TextAlignY::Center))
+            return;
+        buf.geterror();  // fall through to the bitmap font
+    }
+    const int s = BitmapScale(fontSize);
+    const int top = y - 7 * s / 2;
+    for (size_t i = 0; i < text.size(); ++i) {
+        const Glyph* glyph = nullptr;
+        for (const Glyph& g : kGlyphs)
+            if (g.c == text[i]) glyph = &g;
+        if (!glyph) continue;
+        const int left = x + int(i) * 6 * s;
+        for (int row = 0; row < 7; ++row)
+            for (int col = 0; col < 5; ++col)
+                if (glyph->rows[size_t(row)] & (0x10 >> col))
+                    for (int dy = 0; dy < s; ++dy)
+                        for (int dx = 0; dx < s; ++dx)
+                            canvas.Set(left + col * s + dx, top + row * s + dy, 0.0f,
+                                       0.0f, 0.0f);
+    }
+}
+
+/// Draws black `text` rotated to read bottom to top, centred on (cx, cy). Returns false
+/// when no TrueType font is available (the bitmap font has no letters).
+bool DrawVerticalText(Canvas& canvas, int cx, int cy, const std::string& text,
+                      int fontSize) {
+    if (LegendFont().empty() || text.empty()) return false;
+    OIIO::ROI size = OIIO::ImageBufAlgo::text_size(text, fontSize, FontArg());
+    if (!size.defined()) return false;
+    const int w = size.width() + 4, h = size.height() + 4;
+    OIIO::ImageBuf line(OIIO::ImageSpec(w, h, 3, OIIO::TypeDesc::FLOAT));
+    const float white[3] = {1.0f, 1.0f, 1.0f}, black[3] = {0.0f, 0.0f, 0.0f};
+    OIIO::ImageBufAlgo::fill(line, white);
+    if (!OIIO::ImageBufAlgo::render_text(line, 2 - size.xbegin, 2 - size.ybegin, text,
+                                         fontSize, FontArg(), black))
+        return false;
+    // rotate270 turns the row "AB" into the column B-over-A: the text reads upwards.
+    OIIO::ImageBuf rotated = OIIO::ImageBufAlgo::rotate270(line);
+    std::vector<float> px(size_t(w) * size_t(h) * 3);
+    rotated.get_pixels(rotated.roi(), OIIO::TypeDesc::FLOAT, px.data());
+    const int x0 = cx - h / 2, y0 = cy - w / 2;  // rotated image is h wide, w tall
+    for (int y = 0; y < w; ++y)
+        for (int x = 0; x < h; ++x) {
+            const float* p = &px[(size_t(y) * size_t(h) + size_t(x)) * 3];
+            canvas.Set(x0 + x, y0 + y, p[0], p[1], p[2]);
+        }
+    return true;
+}
+
+// ---- Ticks ---------------------------------------------------------------------------
+
+struct Tick {
+    double value;
+    std::string text;
+};
+
+bool IsIntegral(double v) { return std::isfinite(v) && std::floor(v) == v; }
+
+/// Formats a tick value with `decimals` digits after the point. Values off that grid (the
+/// range ends need not be round numbers) get 6 significant digits instead, so an end is
+/// never printed as a different number.
+std::string FormatValue(double v, int decimals) {
+    char buf[64];
+    const double a = std::abs(v), unit = std::pow(10.0, -decimals);
+    if (a != 0.0 && (a >= 1e7 || a < 1e-4))
+        std::snprintf(buf, sizeof(buf), "%.6g", v);
+    else if (std::abs(v / unit - std::round(v / unit)) > 1e-6)
+        std::snprintf(buf, sizeof(buf), "%.6g", v);
+    else
+        std::snprintf(buf, sizeof(buf), "%.*f", decimals, v);
+    return buf;
+}
+
+/// Ticks at lo, hi and at multiples of a 1/2/5 x 10^k step strictly between them, aiming
+/// at `targetIntervals` intervals. An interior tick closer than `minGap` (in units of
+/// value) to an end is dropped so that labels do not overlap. Integral ranges (integer lo
+/// and hi at least 2 apart) get integer ticks.
+std::vector<Tick> ComputeTicks(double lo, double hi, int targetIntervals, double minGap) {
+    const bool integral = IsIntegral(lo) && IsIntegral(hi) && hi - lo >= 2.0;
+    const double raw = (hi - lo) / double(std::max(1, targetIntervals));
+    const double mag = std::pow(10.0, std::floor(std::log10(raw)));
+    const double r = raw / mag;
+    double step = (r < 1.5 ? 1.0 : r < 3.0 ? 2.0 : r < 7.0 ? 5.0 : 10.0) * mag;
+    if (integral) step = std::max(1.0, std::round(step));
+    const int decimals =
+        integral ? 0 : std::clamp(int(-std::floor(std::log10(step) + 1e-9)), 0, 6);
+
+    std::vector<Tick> ticks{{lo, FormatValue(lo, decimals)}};
+    for (double k = std::ceil(lo / step); k * step < hi; k += 1.0) {
+        double v = k * step;
+        if (v - lo < minGap || hi - v < minGap) continue;
+        if (std::abs(v) < 0.5 * step) v = 0.0;  // k == -0.0 or rounding: never print "-0"
+        ticks.push_back({v, FormatValue(v, decimals)});
+    }
+    ticks.push_back({hi, FormatValue(hi, decimals)});
+    return ticks;
+}
+
+// ---- Colour mapping ------------------------------------------------------------------
+
+/// Maps values through the colormap into 3 floats per pixel. NaN and masked pixels are
+/// grey. Throws Error for an unknown colormap.
+std::vector<float> MapColors(const std::string& path, const float* values,
+                             const uint8_t* mask, int width, int height,
+                             const HeatmapScale& scale) {
+    const size_t n = size_t(width) * size_t(height);
+    const double lo = double(scale.min), range = double(scale.max) - double(scale.min);
+    std::vector<float> t(n);
+    for (size_t i = 0; i < n; ++i) {
+        const double v = double(values[i]);
+        t[i] = std::isnan(v) ? 0.0f : float(std::clamp((v - lo) / range, 0.0, 1.0));
+    }
+    OIIO::ImageBuf tBuf(OIIO::ImageSpec(width, height, 1, OIIO::TypeDesc::FLOAT),
+                        t.data());
+    OIIO::ImageBuf rgb = OIIO::ImageBufAlgo::color_map(tBuf, 0, scale.colormap);
+    if (rgb.has_error() || rgb.nchannels() != 3)
+        throw Error("heatmap " + Quote(path) + ": colormap " + Quote(scale.colormap) +
+                    " is unknown (" + rgb.geterror() +
+                    "); must be one of: " + kColormapNames);
+    std::vector<float> out(n * 3);
+    rgb.get_pixels(OIIO::ROI(0, width, 0, height, 0, 1, 0, 3), OIIO::TypeDesc::FLOAT,
+                   out.data());
+    for (size_t i = 0; i < n; ++i)
+        if ((mask && mask[i] == 0) || std::isnan(values[i]))
+            out[3 * i] = out[3 * i + 1] = out[3 * i + 2] = kMaskGrey;
+    return out;
+}
+
+}  // namespace
+
+void WriteHeatmapPng(const std::string& path, const float* values, const uint8_t* mask,
+                     int width, int height, const HeatmapScale& scale) {
+    CheckSize("heatmap", path, width, height);
+    if (!values)
+        throw Error("heatmap " + Quote(path) + ": values is null; expected data");
+    if (!std::isfinite(scale.min) || !std::isfinite(scale.max) ||
+        !(scale.max > scale.min))
+        throw Error("heatmap " + Quote(path) + ": scale [" + std::to_string(scale.min) +
+                    ", " + std::to_string(scale.max) +
+                    "] is invalid; expected finite min < max; hint: pass the fixed range "
+                    "shared by all images that are compared, never a per-image one");
+    const std::vector<float> image = MapColors(path, values, mask, width, height, scale);
+
+    // Legend geometry (see heatmap.h). The panel is laid out in its own coordinates.
+    const bool right = height >= kMinHeightForRightLegend;
+    const int fontSize = right ? std::clamp(height / 32, 12, 22) : 12;
+    const int pad = std::max(6, fontSize / 2);
+    const int barWidth = std::max(12, fontSize);
+    const int tickLength = std::max(3, fontSize / 4);
+    const int gap = std::max(3, fontSize / 3);
+    const int panelHeight = right ? height : kBelowLegendHeight;
+    const int barTop = pad + fontSize * 2 / 3;  // room for half a label above max
+    const int barBottom = panelHeight - 1 - barTop;
+    const int barLength = barBottom - barTop + 1;
+    // About 5 intervals, fewer on short bars; labels keep 1.3 font heights apart.
+    const double range = double(scale.max) - double(scale.min);
+    const int targetIntervals =
+        std::clamp(int(double(barLength) / (2.5 * fontSize)), 1, 5);
+    const std::vector<Tick> ticks =
+        ComputeTicks(double(scale.min), double(scale.max), targetIntervals,
+                     1.3 * fontSize * range / double(std::max(1, barLength - 1)));
+    int tickTextWidth = 0;
+    for (const Tick& t : ticks)
+        tickTextWidth = std::max(tickTextWidth, TextWidth(t.text, fontSize));
+    // The label runs along the bar; shrink its font until it fits the bar's length.
+    int labelSize = fontSize;
+    const bool hasLabel = !scale.label.empty() && !LegendFont().empty();
+    while (hasLabel && labelSize > 9 && TextWidth(scale.label, labelSize) > barLength)
+        --labelSize;
+    const int labelThickness = hasLabel ? labelSize * 5 / 4 + 4 : 0;
+
+    const int barX = pad + 1;  // + 1 for the frame
+    const int tickTextX = barX + barWidth + 1 + tickLength + gap;
+    const int labelCenterX = tickTextX + tickTextWidth + 2 * gap + labelThickness / 2;
+    const int panelWidth =
+        tickTextX + tickTextWidth + (hasLabel ? 2 * gap + labelThickness : 0) + pad;
+
+    const int panelX = right ? width : 0, panelY = right ? 0 : height;
+    Canvas canvas(right ? width + panelWidth : std::max(width, panelWidth),
+                  right ? height : height + panelHeight);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            const float* p = &image[(size_t(y) * size_t(width) + size_t(x)) * 3];
+            canvas.Set(x, y, p[0], p[1], p[2]);
+        }
+
+    // Colour bar: row y shows t = (barBottom - y) / (barLength - 1), through MapColors so
+    // that it matches the image exactly; a one-pixel black frame around it.
+    std::vector<float> ramp(static_cast<size_t>(barLength));
+    for (int i = 0; i < barLength; ++i)
+        ramp[size_t(i)] =
+            float(double(scale.min) +
+                  range * double(barLength - 1 - i) / double(std::max(1, barLength - 1)));
+    ramp.front() = scale.max;
+    ramp.back() = scale.min;
+    const std::vector<float> rampRgb =
+        MapColors(path, ramp.data(), nullptr, 1, barLength, scale);
+    for (int i = 0; i < barLength; ++i)
+        for (int x = 0; x < barWidth; ++x)
+            canvas.Set(panelX + barX + x, panelY + barTop + i, rampRgb[size_t(i) * 3],
+                       rampRgb[size_t(i) * 3 + 1], rampRgb[size_t(i) * 3 + 2]);
+    for (int x = barX - 1; x <= barX + barWidth; ++x) {
+        canvas.Set(panelX + x, panelY + barTop - 1, 0.0f, 0.0f, 0.0f);
+        canvas.Set(panelX + x, panelY + barBottom + 1, 0.0f, 0.0f, 0.0f);
+    }
+    for (int y = barTop - 1; y <= barBottom + 1; ++y) {
+        canvas.Set(panelX + barX - 1, panelY + y, 0.0f, 0.0f, 0.0f);
+        canvas.Set(panelX + barX + barWidth, panelY + y, 0.0f, 0.0f, 0.0f);
+    }
+
+    // Ticks and their labels.
+    for (const Tick& t : ticks) {
+        const int y = barBottom - int(std::lround((t.value - double(scale.min)) / range *
+                                                  double(barLength - 1)));
+        for (int x = 0; x < tickLength; ++x)
+            canvas.Set(panelX + barX + barWidth + 1 + x, panelY + y, 0.0f, 0.0f, 0.0f);
+        DrawText(canvas, panelX + tickTextX, panelY + y, t.text, fontSize);
+    }
+    if (hasLabel)
+        DrawVerticalText(canvas, panelX + labelCenterX, panelY + (barTop + barBottom) / 2,
+                         scale.label, labelSize);
+
+    OIIO::ImageSpec spec(canvas.width, canvas.height, 3, OIIO::TypeDesc::UINT8);
+    // PNG text chunks hold strings only; %.9g round-trips a float exactly.
+    char minText[32], maxText[32];
+    std::snprintf(minText, sizeof(minText), "%.9g", double(scale.min));
+    std::snprintf(maxText, sizeof(maxText), "%.9g", double(scale.max));
+    spec.attribute("reliefsim:min", minText);
+    spec.attribute("reliefsim:max", maxText);
+    spec.attribute("reliefsim:colormap", scale.colormap);
+    spec.attribute("reliefsim:label", scale.label);
+    AtomicWrite("heatmap", path, [&](const std::string& tmpPath) {
+        return WriteImageFile(tmpPath, "png", spec, canvas.px.data());
+    });
+}
+
+void WriteColorPng(const std::string& path, const float* rgb, int width, int height) {
+    CheckSize("color png", path, width, height);
+    if (!rgb) throw Error("color png " + Quote(path) + ": rgb is null; expected data");
+    const OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
+    AtomicWrite("color png", path, [&](const std::string& tmpPath) {
+        return WriteImageFile(tmpPath, "png", spec, rgb);
+    });
+}
+
+void WriteMultiChannelExr(const std::string& path, int width, int height,
+                          const std::vector<std::string>& channelNames,
+                          const std::vector<const float*>& planes) {
+    CheckSize("exr", path, width, height);
+    if (channelNames.empty() || channelNames.size() != planes.size())
+        throw Error("exr " + Quote(path) + ": " + std::to_string(channelNames.size()) +
+                    " channel names for " + std::to_string(planes.size()) +
+                    " planes; expected one name per plane and at least one plane");
+    std::set<std::string> seen;
+    std::string order;
+    for (size_t c = 0; c < planes.size(); ++c) {
+        const std::string& name = channelNames[c];
+        if (name.empty() || name.find('\n') != std::string::npos ||
+            !seen.insert(name).second)
+            throw Error("exr " + Quote(path) + ": channel name " + Quote(name) +
+                        " is empty, repeated or has a newline; expected unique names");
+        if (!planes[c])
+            throw Error("exr " + Quote(path) + ": plane " + Quote(name) +
+                        " is null; expected width*height floats");
+        order += (c ? "\n" : "") + name;
+    }
+    const size_t n = size_t(width) * size_t(height), nc = planes.size();
+    std::vector<float> interleaved(n * nc);
+    for (size_t i = 0; i < n; ++i)
+        for (size_t c = 0; c < nc; ++c) interleaved[i * nc + c] = planes[c][i];
+
+    OIIO::ImageSpec spec(width, height, int(nc), OIIO::TypeDesc::FLOAT);
+    spec.channelnames = channelNames;
+    spec.alpha_channel = -1;  // a channel named "A" is data here, not coverage
+    spec.attribute("compression", "zip");
+    spec.attribute(kChannelOrderAttr, order);
+    AtomicWrite("exr", path, [&](const std::string& tmpPath) {
+        return WriteImageFile(tmpPath, "openexr", spec, interleaved.data());
+    });
+}
+
+ExrPlanes ReadMultiChannelExr(const std::string& path) {
+    auto in = OIIO::ImageInput::open(path);
+    if (!in)
+        throw Error("exr " + Quote(path) + ": cannot open (" + OIIO::geterror() +
+                    "); expected a readable image file");
+    const OIIO::ImageSpec spec = in->spec();
+    const int nc = spec.nchannels;
+    const size_t n = size_t(spec.width) * size_t(spec.height);
+    std::vector<float> interleaved(n * size_t(nc));
+    if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, interleaved.data()))
+        throw Error("exr " + Quote(path) + ": cannot read pixels (" + in->geterror() +
+                    "); expected an intact file");
+
+    ExrPlanes result;
+    result.width = spec.width;
+    result.height = spec.height;
+    std::vector<int> fileIndex(static_cast<size_t>(nc));
+    for (int c = 0; c < nc; ++c) fileIndex[size_t(c)] = c;
+    // Restore the writer's channel order when it names exactly the file's channels.
+    const std::string order = spec.get_string_attribute(kChannelOrderAttr);
+    std::vector<std::string> wanted;
+    for (size_t start = 0; !order.empty() && start <= order.size();) {
+        const size_t end = std::min(order.find('\n', start), order.size());
+        wanted.push_back(order.substr(start, end - start));
+        start = end + 1;
+    }
+    if (wanted.size() == size_t(nc)) {
+        std::vector<int> reordered;
+        for (const std::string& name : wanted) {
+            const int c = spec.channelindex(name);
+            if (c < 0) break;
+            reordered.push_back(c);
+        }
+        if (reordered.size() == size_t(nc) &&
+            std::set<int>(reordered.begin(), reordered.end()).size() == size_t(nc))
+            fileIndex = reordered;
+    }
+    for (int c : fileIndex) {
+        result.names.push_back(spec.channel_name(c));
+        std::vector<float> plane(n);
+        for (size_t i = 0; i < n; ++i) plane[i] = interleaved[i * size_t(nc) + size_t(c)];
+        result.planes.push_back(std::move(plane));
+    }
+    return result;
+}
+
+}  // namespace reliefsim
