@@ -1,6 +1,7 @@
 // The per-pixel record shared by kernels (producer), the frame loop and metrics (consumers).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 

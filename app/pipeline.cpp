@@ -1,0 +1,337 @@
+// The render pipeline: scene set-up, the fragment program running a kernel per lane, outputs.
+#include "app/pipeline.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+
+#include <tbb/global_control.h>
+
+#include "core/error.h"
+#include "metrics/heatmap.h"
+#include "raster/camera.h"
+#include "raster/mesh.h"
+#include "raster/rasterizer.h"
+
+namespace reliefsim {
+
+namespace fs = std::filesystem;
+
+void ValidateSettings(const RenderSettings& s) {
+    auto bad = [](const std::string& what) { throw Error(what); };
+    if (s.width < 1 || s.height < 1 || s.width > 16384 || s.height > 16384)
+        bad("--size " + std::to_string(s.width) + "x" + std::to_string(s.height) +
+            ": each side must be in [1, 16384]");
+    if (!(s.viewAngle >= 0.0f && s.viewAngle < 90.0f))
+        bad("--view-angle " + std::to_string(s.viewAngle) + ": must be in [0, 90) degrees");
+    if (!std::isfinite(s.azimuth)) bad("--azimuth: must be a finite number of degrees");
+    if (!(s.depthScale > 0.0f) || !std::isfinite(s.depthScale))
+        bad("--depth-scale " + std::to_string(s.depthScale) + ": must be > 0");
+    if (!(s.tiling > 0.0f) || !std::isfinite(s.tiling))
+        bad("--tiling " + std::to_string(s.tiling) + ": must be > 0");
+    if (!(s.distance > 0.0f) || !std::isfinite(s.distance))
+        bad("--distance " + std::to_string(s.distance) + ": must be > 0");
+    if (!(s.fovY > 0.0f && s.fovY < 180.0f))
+        bad("--fov " + std::to_string(s.fovY) + ": must be in (0, 180) degrees");
+    if (s.threads < 0) bad("--threads " + std::to_string(s.threads) + ": must be >= 0");
+    if (!(s.iterScaleMax > s.iterScaleMin))
+        bad("--iterations-scale: max must be greater than min");
+    if (!(s.fetchScaleMax > s.fetchScaleMin))
+        bad("--fetches-scale: max must be greater than min");
+    ResolveParams(FindMethod(s.method), s.set);
+}
+
+namespace {
+
+Camera SettingsCamera(const RenderSettings& s) {
+    return MakeOrbitCamera(s.viewAngle, s.azimuth, s.distance, s.fovY,
+                           float(s.width) / float(s.height));
+}
+
+Mesh TexturedPlane(float tiling) {
+    Mesh mesh;
+    const float xs[4] = {-0.5f, 0.5f, 0.5f, -0.5f}, ys[4] = {-0.5f, -0.5f, 0.5f, 0.5f};
+    for (int k = 0; k < 4; ++k) {
+        Vertex v;
+        v.position = glm::vec3(xs[k], ys[k], 0.0f);
+        v.uv = glm::vec2((xs[k] + 0.5f) * tiling, (0.5f - ys[k]) * tiling);
+        v.tangent = glm::vec3(1, 0, 0);
+        v.bitangent = glm::vec3(0, -1, 0);
+        v.normal = glm::vec3(0, 0, 1);
+        mesh.vertices.push_back(v);
+    }
+    mesh.indices = {0, 1, 2, 0, 2, 3};
+    return mesh;
+}
+
+// Shading of the hit (not part of the kernel's counts): Lambert with a normal from central
+// differences of the bilinear depth, albedo by depth.
+glm::vec3 Shade(const HeightField& field, const SamplerState& state, glm::vec2 uv, float depth,
+                float slopeScale, bool hit) {
+    Sampler<false> s(field, state);
+    const float du = 1.0f / float(field.width), dv = 1.0f / float(field.height);
+    float ddu = (s.Sample(uv + glm::vec2(du, 0)) - s.Sample(uv - glm::vec2(du, 0))) / (2 * du);
+    float ddv = (s.Sample(uv + glm::vec2(0, dv)) - s.Sample(uv - glm::vec2(0, dv))) / (2 * dv);
+    glm::vec3 n(ddu * slopeScale, ddv * slopeScale, 1.0f);
+    n = n * (1.0f / std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z));
+    glm::vec3 l(-0.4f, -0.5f, 0.77f);
+    l = l * (1.0f / std::sqrt(l.x * l.x + l.y * l.y + l.z * l.z));
+    float lambert = std::fmax(0.0f, n.x * l.x + n.y * l.y + n.z * l.z);
+    float d = std::fmin(std::fmax(depth, 0.0f), 1.0f);
+    glm::vec3 top(0.93f, 0.80f, 0.55f), deep(0.35f, 0.45f, 0.65f);
+    glm::vec3 albedo = top + (deep - top) * d;
+    if (!hit) albedo = glm::vec3(0.9f, 0.1f, 0.6f);  // no hit: magenta, as peers do
+    return albedo * (0.15f + 0.85f * lambert);
+}
+
+struct TileTotals {
+    uint64_t helperLanes = 0, helperFetches = 0, helperTexelReads = 0;
+};
+
+template <class KernelT>
+class KernelProgram {
+public:
+    KernelProgram(const KernelT& kernel, const HeightField& field, const SamplerState& state,
+                  const ViewUniforms& uniforms, float slopeScale, FrameRecord& record,
+                  std::vector<float>& color, std::vector<TileTotals>& tiles)
+        : kernel_(kernel), field_(field), state_(state), uniforms_(uniforms),
+          slopeScale_(slopeScale), record_(record), color_(color), tiles_(tiles) {}
+
+    void ShadeQuad(const QuadFragment& q, int tileIndex) {
+        for (int k = 0; k < 4; ++k) {
+            const int px = q.pixel0.x + (k & 1), py = q.pixel0.y + (k >> 1);
+            MarchInput in = PixelToRay(uniforms_, px, py);
+            FetchCounts counts;
+            CountingSampler sampler(field_, state_, &counts);
+            MarchResult m = kernel_.March(in, sampler);
+            if (!((q.coveredMask >> k) & 1u)) {
+                TileTotals& t = tiles_[size_t(tileIndex)];
+                ++t.helperLanes;
+                t.helperFetches += counts.nFetches;
+                t.helperTexelReads += counts.nTexelReads;
+                continue;
+            }
+            const size_t i = record_.Index(px, py);
+            record_.hitU[i] = m.uvHit.x;
+            record_.hitV[i] = m.uvHit.y;
+            record_.hitDepth[i] = m.depthHit;
+            record_.nCoarse[i] = m.nCoarse;
+            record_.nRefine[i] = m.nRefine;
+            record_.nFetches[i] = counts.nFetches;
+            record_.nTexelReads[i] = counts.nTexelReads;
+            uint8_t f = kFlagCovered;
+            if (m.budgetExhausted) f |= kFlagBudgetExhausted;
+            if (!m.hit) f |= kFlagNoHit;
+            record_.flags[i] = f;
+            glm::vec3 c = Shade(field_, state_, m.uvHit, m.depthHit, slopeScale_, m.hit);
+            color_[3 * i + 0] = c.x;
+            color_[3 * i + 1] = c.y;
+            color_[3 * i + 2] = c.z;
+        }
+    }
+
+private:
+    const KernelT& kernel_;
+    const HeightField& field_;
+    SamplerState state_;
+    ViewUniforms uniforms_;
+    float slopeScale_;
+    FrameRecord& record_;
+    std::vector<float>& color_;
+    std::vector<TileTotals>& tiles_;
+};
+
+}  // namespace
+
+ViewUniforms MakeViewUniforms(const RenderSettings& s) {
+    Camera cam = SettingsCamera(s);
+    const glm::mat4& v = cam.viewFromWorld;
+    const double tanY = std::tan(double(s.fovY) * 0.5 * 3.14159265358979323846 / 180.0);
+    const double tanX = tanY * double(s.width) / double(s.height);
+    ViewUniforms u;
+    u.eye = cam.eye;
+    u.right = glm::vec3(float(double(v[0][0]) * tanX), float(double(v[1][0]) * tanX),
+                        float(double(v[2][0]) * tanX));
+    u.up = glm::vec3(float(double(v[0][1]) * tanY), float(double(v[1][1]) * tanY),
+                     float(double(v[2][1]) * tanY));
+    u.forward = glm::vec3(-v[0][2], -v[1][2], -v[2][2]);
+    u.width = float(s.width);
+    u.height = float(s.height);
+    u.tiling = s.tiling;
+    u.depthScale = s.depthScale;
+    return u;
+}
+
+RenderOutput Render(const HeightField& field, const RenderSettings& s) {
+    ValidateSettings(s);
+    ValidateHeightField(field);
+    RenderOutput out;
+    const MethodInfo& method = FindMethod(s.method);
+    out.params = ResolveParams(method, s.set);
+    Kernel kernel = MakeKernel(method, out.params);
+
+    std::unique_ptr<tbb::global_control> limit;
+    if (s.threads > 0)
+        limit = std::make_unique<tbb::global_control>(
+            tbb::global_control::max_allowed_parallelism, size_t(s.threads));
+    out.threads = int(tbb::global_control::active_value(
+        tbb::global_control::max_allowed_parallelism));
+
+    out.record.Resize(s.width, s.height);
+    out.color.assign(size_t(s.width) * size_t(s.height) * 3, 0.0f);
+    std::vector<TileTotals> tiles(size_t(TileCount(s.width, s.height)));
+    const ViewUniforms uniforms = MakeViewUniforms(s);
+    const Camera camera = SettingsCamera(s);
+    const Mesh mesh = TexturedPlane(s.tiling);
+    const float slopeScale = s.depthScale * s.tiling;
+
+    auto start = std::chrono::steady_clock::now();
+    RasterStats stats = std::visit(
+        [&](const auto& k) {
+            using K = std::decay_t<decltype(k)>;
+            KernelProgram<K> program(k, field, s.sampler, uniforms, slopeScale, out.record,
+                                     out.color, tiles);
+            return RasterizeFrame(mesh, camera, s.width, s.height, program);
+        },
+        kernel);
+    out.frameSeconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    out.nQuads = stats.nQuads;
+    for (const TileTotals& t : tiles) {  // tile-index order
+        out.record.nHelperLanes += t.helperLanes;
+        out.record.nHelperFetches += t.helperFetches;
+        out.record.nHelperTexelReads += t.helperTexelReads;
+    }
+    out.summary = Summarize(out.record, field, s.sampler);
+    return out;
+}
+
+nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
+                           const HeightField& field) {
+    const FrameSummary& m = out.summary;
+    nlohmann::json params = nlohmann::json::object();
+    for (const auto& [k, v] : out.params) {
+        if (v == std::floor(v)) params[k] = int64_t(v);
+        else params[k] = v;
+    }
+    nlohmann::json j;
+    j["method"] = s.method;
+    j["params"] = params;
+    j["map"] = field.name;
+    j["map_width"] = field.width;
+    j["map_height"] = field.height;
+    j["width"] = s.width;
+    j["height"] = s.height;
+    j["view_angle"] = s.viewAngle;
+    j["azimuth"] = s.azimuth;
+    j["distance"] = s.distance;
+    j["fov"] = s.fovY;
+    j["depth_scale"] = s.depthScale;
+    j["tiling"] = s.tiling;
+    j["filter"] = std::string(ToString(s.sampler.filter));
+    j["wrap"] = std::string(ToString(s.sampler.wrap));
+    j["covered_pixels"] = m.coveredPixels;
+    j["avg_iterations"] = m.avgIterations;
+    j["avg_coarse_iterations"] = m.avgCoarse;
+    j["avg_refine_iterations"] = m.avgRefine;
+    j["avg_fetches"] = m.avgFetches;
+    j["max_fetches"] = m.maxFetches;
+    j["total_fetches"] = m.totalFetches;
+    j["total_texel_reads"] = m.totalTexelReads;
+    j["budget_exhausted_pixels"] = m.budgetExhaustedPixels;
+    j["no_hit_pixels"] = m.noHitPixels;
+    j["mse_paper"] = m.msePaper;
+    j["sum_sq_error_paper"] = m.sumSqPaper;
+    j["max_abs_error_paper"] = m.maxAbsErrorPaper;
+    j["quads"] = out.nQuads;
+    j["helper_lanes"] = out.record.nHelperLanes;
+    j["helper_fetches"] = out.record.nHelperFetches;
+    j["helper_texel_reads"] = out.record.nHelperTexelReads;
+    j["lane_fetches_4x2"] = m.laneFetches4x2;
+    j["lane_fetches_8x4"] = m.laneFetches8x4;
+    j["heatmap_scale"] = {{"iterations", {s.iterScaleMin, s.iterScaleMax}},
+                          {"fetches", {s.fetchScaleMin, s.fetchScaleMax}}};
+    j["timing"] = {{"frame_seconds", out.frameSeconds}, {"threads", out.threads}};
+    return j;
+}
+
+namespace {
+
+void WriteText(const fs::path& path, const std::string& text) {
+    std::ofstream f(path, std::ios::binary);
+    f << text;
+    f.close();
+    if (!f) throw Error("\"" + path.string() + "\": cannot write");
+}
+
+}  // namespace
+
+void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
+                        const RenderSettings& s, const HeightField& field) {
+    if (outDir.empty()) throw Error("--out: empty; give a directory");
+    fs::path dir(outDir);
+    std::error_code ec;
+    if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+        throw Error("--out \"" + outDir + "\": exists and is not a directory");
+    fs::path parent = dir.has_parent_path() ? dir.parent_path() : fs::path(".");
+    if (dir.filename().empty()) parent = dir.parent_path().parent_path();
+    if (!fs::is_directory(parent, ec))
+        throw Error("--out \"" + outDir + "\": parent directory \"" + parent.string() +
+                    "\" does not exist");
+    std::string tmpl = (parent / (".reliefsim-staging-XXXXXX")).string();
+    std::vector<char> buf(tmpl.begin(), tmpl.end());
+    buf.push_back('\0');
+    if (!mkdtemp(buf.data()))
+        throw Error("--out \"" + outDir + "\": cannot create a staging directory in \"" +
+                    parent.string() + "\"");
+    fs::path staging(buf.data());
+    const std::vector<std::string> names = {"color.png", "iterations.png", "fetches.png",
+                                            "record.exr", "metrics.json"};
+    try {
+        const FrameRecord& r = out.record;
+        const int w = r.width, h = r.height;
+        const size_t n = size_t(w) * size_t(h);
+        std::vector<uint8_t> mask(n);
+        std::vector<float> iters(n), fetches(n), coarse(n), refine(n), texels(n), flags(n),
+            err(n);
+        for (size_t i = 0; i < n; ++i) {
+            mask[i] = r.Covered(i) ? 1 : 0;
+            coarse[i] = float(r.nCoarse[i]);
+            refine[i] = float(r.nRefine[i]);
+            iters[i] = float(r.nCoarse[i] + r.nRefine[i]);
+            fetches[i] = float(r.nFetches[i]);
+            texels[i] = float(r.nTexelReads[i]);
+            flags[i] = float(r.flags[i]);
+            err[i] = PaperError(r, i, field, s.sampler);
+        }
+        WriteColorPng((staging / "color.png").string(), out.color.data(), w, h);
+        WriteHeatmapPng((staging / "iterations.png").string(), iters.data(), mask.data(), w, h,
+                        {s.iterScaleMin, s.iterScaleMax, "inferno",
+                         "iterations (coarse + refine), " + s.method});
+        WriteHeatmapPng((staging / "fetches.png").string(), fetches.data(), mask.data(), w, h,
+                        {s.fetchScaleMin, s.fetchScaleMax, "inferno", "fetches, " + s.method});
+        WriteMultiChannelExr((staging / "record.exr").string(), w, h,
+                             {"hit_u", "hit_v", "hit_depth", "coarse_iterations",
+                              "refine_iterations", "iterations", "fetches", "texel_reads",
+                              "flags", "error_paper"},
+                             {r.hitU.data(), r.hitV.data(), r.hitDepth.data(), coarse.data(),
+                              refine.data(), iters.data(), fetches.data(), texels.data(),
+                              flags.data(), err.data()});
+        WriteText(staging / "metrics.json", MetricsJson(out, s, field).dump(2) + "\n");
+        if (!fs::exists(dir)) {
+            fs::rename(staging, dir);
+        } else {
+            for (const auto& name : names) fs::rename(staging / name, dir / name);
+            fs::remove_all(staging);
+        }
+    } catch (...) {
+        fs::remove_all(staging, ec);
+        throw;
+    }
+}
+
+}  // namespace reliefsim

@@ -1,0 +1,65 @@
+// The render pipeline: scene set-up, the fragment program running a kernel per lane, outputs.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "core/record.h"
+#include "kernels/registry.h"
+#include "kernels/view_ray.h"
+#include "metrics/summary.h"
+#include "texture/height_field.h"
+#include "texture/sampler.h"
+
+namespace reliefsim {
+
+/// Everything `reliefsim render` takes besides the map. Defaults are the documented ones.
+struct RenderSettings {
+    std::string method = "relief";
+    std::vector<std::string> set;  ///< "key=value" kernel parameters
+    int width = 512, height = 512;
+    float viewAngle = 45.0f;   ///< degrees from the plane normal, [0, 90)
+    float azimuth = 0.0f;      ///< degrees around the normal
+    float distance = 1.25f;    ///< camera distance from the plane centre, plane units
+    float fovY = 45.0f;        ///< vertical field of view, degrees
+    float depthScale = 0.1f;   ///< relief depth in plane units; > 0
+    float tiling = 1.0f;       ///< texture repeats across the plane; > 0
+    SamplerState sampler;      ///< height-map filter and wrap
+    int threads = 0;           ///< worker threads; 0 = all cores
+    float iterScaleMin = 0.0f, iterScaleMax = 64.0f;    ///< iterations heatmap scale
+    float fetchScaleMin = 0.0f, fetchScaleMax = 64.0f;  ///< fetches heatmap scale
+};
+
+/// Throws Error naming the first bad setting (size, angles, depth scale, tiling, threads,
+/// scales, method, parameters).
+void ValidateSettings(const RenderSettings& settings);
+
+struct RenderOutput {
+    FrameRecord record;
+    std::vector<float> color;  ///< RGB in [0,1], 3 floats per pixel, row 0 at the top
+    ParamValues params;        ///< resolved kernel parameters
+    FrameSummary summary;
+    uint64_t nQuads = 0;
+    double frameSeconds = 0.0;  ///< wall time of the frame loop (timing only)
+    int threads = 0;            ///< threads the frame loop was allowed (timing only)
+};
+
+/// The view uniforms of the settings' camera (shared by the C++ and GLSL paths).
+ViewUniforms MakeViewUniforms(const RenderSettings& settings);
+
+/// Renders one frame of the textured plane with the settings' method.
+RenderOutput Render(const HeightField& field, const RenderSettings& settings);
+
+/// metrics.json content: the contract keys plus extras; timing fields only under "timing".
+nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& settings,
+                           const HeightField& field);
+
+/// Writes color.png, iterations.png, fetches.png, record.exr and metrics.json into outDir,
+/// atomically: all files are written to a staging directory first, so a failure leaves
+/// nothing behind.
+void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
+                        const RenderSettings& settings, const HeightField& field);
+
+}  // namespace reliefsim

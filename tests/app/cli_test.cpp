@@ -1,0 +1,146 @@
+// The command line: help, methods, and bad input (one error line, non-zero exit, no output).
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "texture/image_io.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+    int exitCode;
+    std::string out, err;
+};
+
+fs::path Scratch() {
+    fs::path p = fs::path(::testing::TempDir()) /
+                 ("rs_cli_" + std::string(::testing::UnitTest::GetInstance()
+                                              ->current_test_info()
+                                              ->name()));
+    fs::remove_all(p);
+    fs::create_directories(p);
+    return p;
+}
+
+std::string Slurp(const fs::path& p) {
+    std::ifstream f(p);
+    return std::string(std::istreambuf_iterator<char>(f), {});
+}
+
+Result RunCli(const std::string& args, const fs::path& scratch) {
+    const std::string bin = std::string(RS_BINARY_DIR) + "/app/reliefsim";
+    const fs::path out = scratch / "stdout.txt", err = scratch / "stderr.txt";
+    std::string cmd = bin + " " + args + " >" + out.string() + " 2>" + err.string();
+    int status = std::system(cmd.c_str());
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, Slurp(out), Slurp(err)};
+}
+
+int CountLines(const std::string& s) {
+    return int(std::count(s.begin(), s.end(), '\n'));
+}
+
+void ExpectCleanFailure(const std::string& args, const std::string& culprit) {
+    fs::path d = Scratch();
+    fs::path outDir = d / "out";
+    Result r = RunCli(args + " --out " + outDir.string(), d);
+    EXPECT_NE(r.exitCode, 0) << args;
+    EXPECT_EQ(CountLines(r.err), 1) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(culprit), std::string::npos) << args << "\n" << r.err;
+    EXPECT_FALSE(fs::exists(outDir)) << args;
+    for (const auto& e : fs::directory_iterator(d))
+        EXPECT_EQ(e.path().filename().string().find("staging"), std::string::npos);
+}
+
+}  // namespace
+
+TEST(Cli, HelpOnEveryCommand) {
+    fs::path d = Scratch();
+    for (const char* cmd : {"--help", "methods --help", "render --help", "summary --help"}) {
+        Result r = RunCli(cmd, d);
+        EXPECT_EQ(r.exitCode, 0) << cmd;
+        EXPECT_NE(r.out.find("Usage"), std::string::npos) << cmd;
+    }
+}
+
+TEST(Cli, MethodsListsParametersWithRanges) {
+    Result r = RunCli("methods", Scratch());
+    EXPECT_EQ(r.exitCode, 0);
+    for (const char* s : {"linear", "relief", "secant", "interval", "pom", "linear_steps",
+                          "refine_steps", "early_exit", "budget", "[1, 1024]"})
+        EXPECT_NE(r.out.find(s), std::string::npos) << s;
+}
+
+TEST(Cli, RenderWritesTheFiveOutputs) {
+    fs::path d = Scratch();
+    Result r = RunCli("render --map builtin:shapes:64 --method relief --size 64x48 --out " +
+                          (d / "o").string(),
+                      d);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    for (const char* name :
+         {"color.png", "iterations.png", "fetches.png", "record.exr", "metrics.json"})
+        EXPECT_TRUE(fs::exists(d / "o" / name)) << name;
+}
+
+TEST(Cli, MissingFile) {
+    ExpectCleanFailure("render --map /nonexistent/height.png --method relief", "height.png");
+}
+
+TEST(Cli, CorruptFile) {
+    fs::path d = Scratch();
+    fs::path bad = d.parent_path() / "rs_cli_corrupt.png";
+    std::ofstream(bad) << "\x89PNG garbage";
+    ExpectCleanFailure("render --map " + bad.string() + " --method relief", "rs_cli_corrupt.png");
+}
+
+TEST(Cli, ZeroSizeImage) {
+    fs::path d = Scratch();
+    fs::path zero = d.parent_path() / "rs_cli_zero.tga";
+    std::array<unsigned char, 18> header{};  // uncompressed grey TGA, 0x0 pixels, 8 bits
+    header[2] = 3;
+    header[16] = 8;
+    std::ofstream(zero, std::ios::binary).write(reinterpret_cast<char*>(header.data()), 18);
+    ExpectCleanFailure("render --map " + zero.string() + " --method relief", "rs_cli_zero.tga");
+}
+
+TEST(Cli, NanHeights) {
+    fs::path d = Scratch();
+    fs::path nan = d.parent_path() / "rs_cli_nan.exr";
+    float px[4] = {0.1f, std::nanf(""), 0.3f, 0.4f};
+    reliefsim::WriteFloatImage(nan.string(), 2, 2, 1, px);
+    ExpectCleanFailure("render --map " + nan.string() + " --method relief", "NaN");
+}
+
+TEST(Cli, UnknownMethod) {
+    ExpectCleanFailure("render --map builtin:shapes:32 --method cheese", "cheese");
+}
+
+TEST(Cli, NegativeSteps) {
+    ExpectCleanFailure("render --map builtin:shapes:32 --method relief --set linear_steps=-3",
+                       "linear_steps");
+}
+
+TEST(Cli, NonPositiveDepthScale) {
+    ExpectCleanFailure("render --map builtin:shapes:32 --method relief --depth-scale 0",
+                       "--depth-scale");
+    ExpectCleanFailure("render --map builtin:shapes:32 --method relief --depth-scale -1",
+                       "--depth-scale");
+}
+
+TEST(Cli, ViewAngleOutsideRange) {
+    ExpectCleanFailure("render --map builtin:shapes:32 --method relief --view-angle 90",
+                       "--view-angle");
+    ExpectCleanFailure("render --map builtin:shapes:32 --method relief --view-angle -5",
+                       "--view-angle");
+}
+
+TEST(Cli, BadSize) {
+    ExpectCleanFailure("render --map builtin:shapes:32 --method relief --size 0x10", "--size");
+}

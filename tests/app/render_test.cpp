@@ -1,0 +1,130 @@
+// The render pipeline end to end: determinism, analytic scenes, outputs.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "app/pipeline.h"
+#include "core/error.h"
+#include "texture/procedural.h"
+
+using namespace reliefsim;
+namespace fs = std::filesystem;
+
+namespace {
+
+RenderSettings Small(const std::string& method) {
+    RenderSettings s;
+    s.method = method;
+    s.width = 150;  // not a multiple of the tile or quad size
+    s.height = 97;
+    s.viewAngle = 55.0f;
+    s.azimuth = 20.0f;
+    return s;
+}
+
+nlohmann::json WithoutTiming(nlohmann::json j) {
+    j.erase("timing");
+    return j;
+}
+
+void ExpectSameRecord(const FrameRecord& a, const FrameRecord& b) {
+    EXPECT_EQ(a.hitU, b.hitU);
+    EXPECT_EQ(a.hitV, b.hitV);
+    EXPECT_EQ(a.hitDepth, b.hitDepth);
+    EXPECT_EQ(a.nCoarse, b.nCoarse);
+    EXPECT_EQ(a.nRefine, b.nRefine);
+    EXPECT_EQ(a.nFetches, b.nFetches);
+    EXPECT_EQ(a.nTexelReads, b.nTexelReads);
+    EXPECT_EQ(a.flags, b.flags);
+    EXPECT_EQ(a.nHelperLanes, b.nHelperLanes);
+    EXPECT_EQ(a.nHelperFetches, b.nHelperFetches);
+}
+
+}  // namespace
+
+TEST(Render, IdenticalForOneAndTwoThreadsAndReruns) {
+    HeightField f = MakeBuiltinMap("builtin:shapes:128");
+    for (const char* method : {"linear", "relief", "secant", "interval", "pom"}) {
+        RenderSettings s = Small(method);
+        s.threads = 1;
+        RenderOutput one = Render(f, s);
+        s.threads = 2;
+        RenderOutput two = Render(f, s);
+        RenderOutput again = Render(f, s);
+        ExpectSameRecord(one.record, two.record);
+        ExpectSameRecord(two.record, again.record);
+        EXPECT_EQ(one.color, two.color) << method;
+        EXPECT_EQ(WithoutTiming(MetricsJson(one, s, f)), WithoutTiming(MetricsJson(two, s, f)))
+            << method;
+        EXPECT_GT(one.summary.coveredPixels, 1000u);
+    }
+}
+
+TEST(Render, FlatMapHitsItsDepthEverywhere) {
+    HeightField f = MakeBuiltinMap("flat", 64, 64);
+    RenderSettings s = Small("relief");
+    s.set = {"linear_steps=8", "refine_steps=5"};
+    RenderOutput out = Render(f, s);
+    const FrameRecord& r = out.record;
+    for (size_t i = 0; i < r.flags.size(); ++i) {
+        if (!r.Covered(i)) continue;
+        EXPECT_NEAR(r.hitDepth[i], 0.5f, (1.0f / 8.0f) / 64.0f + 1e-6f);
+        EXPECT_EQ(r.nFetches[i], 5u + 5u);  // t = 0..4/8, then 5 binary steps
+    }
+    EXPECT_LT(out.summary.msePaper, 1e-5);
+    EXPECT_EQ(out.summary.budgetExhaustedPixels, 0u);
+}
+
+TEST(Render, HelperLanesExecuteAndAreCountedSeparately) {
+    HeightField f = MakeBuiltinMap("builtin:bumps:64");
+    RenderOutput out = Render(f, Small("linear"));
+    EXPECT_GT(out.record.nHelperLanes, 0u);
+    EXPECT_GT(out.record.nHelperFetches, 0u);
+    EXPECT_EQ(out.nQuads * 4, out.summary.coveredPixels + out.record.nHelperLanes);
+}
+
+TEST(Render, BudgetFlagsPixels) {
+    HeightField f = MakeBuiltinMap("builtin:shapes:64");
+    RenderSettings s = Small("relief");
+    s.set = {"budget=4"};
+    RenderOutput out = Render(f, s);
+    EXPECT_GT(out.summary.budgetExhaustedPixels, 0u);
+    EXPECT_LE(out.summary.maxFetches, 4u);
+}
+
+TEST(Render, WritesAllOutputsWithContractKeys) {
+    fs::path dir = fs::path(::testing::TempDir()) / "rs_render_outputs";
+    fs::remove_all(dir);
+    HeightField f = MakeBuiltinMap("builtin:shapes:64");
+    RenderSettings s = Small("relief");
+    RenderOutput out = Render(f, s);
+    WriteRenderOutputs(dir.string(), out, s, f);
+    for (const char* name :
+         {"color.png", "iterations.png", "fetches.png", "record.exr", "metrics.json"})
+        EXPECT_TRUE(fs::exists(dir / name)) << name;
+    std::ifstream in(dir / "metrics.json");
+    nlohmann::json j;
+    in >> j;
+    for (const char* key : {"method", "params", "width", "height", "covered_pixels",
+                            "avg_iterations", "avg_fetches", "max_fetches", "total_fetches",
+                            "budget_exhausted_pixels", "mse_paper", "timing"})
+        EXPECT_TRUE(j.contains(key)) << key;
+    EXPECT_EQ(j["params"]["linear_steps"], 32);
+    EXPECT_EQ(j["covered_pixels"], out.summary.coveredPixels);
+    // no staging directory left behind
+    for (const auto& e : fs::directory_iterator(dir.parent_path()))
+        EXPECT_EQ(e.path().filename().string().find(".reliefsim-staging"), std::string::npos);
+}
+
+TEST(Render, InvalidSettingsThrowBeforeRendering) {
+    HeightField f = MakeBuiltinMap("builtin:flat:8");
+    RenderSettings s = Small("relief");
+    s.depthScale = 0.0f;
+    EXPECT_THROW(Render(f, s), Error);
+    s = Small("relief");
+    s.viewAngle = 90.0f;
+    EXPECT_THROW(Render(f, s), Error);
+    s = Small("nope");
+    EXPECT_THROW(Render(f, s), Error);
+}

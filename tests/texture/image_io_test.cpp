@@ -1,0 +1,130 @@
+// Height-map loading: formats, channels, conventions, bad files.
+#include <gtest/gtest.h>
+
+#include <OpenImageIO/imageio.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.h"
+#include "texture/image_io.h"
+
+using namespace reliefsim;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path TempDir() {
+    fs::path p = fs::path(::testing::TempDir()) /
+                 ("rs_image_io_" + std::string(::testing::UnitTest::GetInstance()
+                                                   ->current_test_info()
+                                                   ->name()));
+    fs::remove_all(p);
+    fs::create_directories(p);
+    return p;
+}
+
+template <typename T>
+void WriteWithOiio(const std::string& path, int w, int h, int nc, OIIO::TypeDesc type,
+                   const std::vector<T>& px) {
+    OIIO::ImageSpec spec(w, h, nc, type);
+    auto out = OIIO::ImageOutput::create(path);
+    ASSERT_TRUE(out && out->open(path, spec) && out->write_image(type, px.data()) &&
+                out->close());
+}
+
+}  // namespace
+
+TEST(ImageIo, Grey8BitHeightBecomesDepth) {
+    fs::path d = TempDir();
+    std::string path = (d / "g.png").string();
+    WriteWithOiio<uint8_t>(path, 2, 1, 1, OIIO::TypeDesc::UINT8, {255, 51});
+    HeightField f = LoadHeightMap(path, {});
+    ASSERT_EQ(f.width, 2);
+    EXPECT_EQ(f.At(0, 0), 0.0f);  // white = top
+    EXPECT_EQ(f.At(1, 0), Unorm8ToFloat(204));
+    ASSERT_EQ(f.depth8.size(), 2u);
+    EXPECT_EQ(f.depth8[1], 204);
+    MapLoadOptions depth;
+    depth.stores = Stores::Depth;
+    EXPECT_EQ(LoadHeightMap(path, depth).At(1, 0), Unorm8ToFloat(51));
+}
+
+TEST(ImageIo, RgbaDefaultsToAlphaAndChannelPicks) {
+    fs::path d = TempDir();
+    std::string path = (d / "c.tga").string();
+    WriteWithOiio<uint8_t>(path, 1, 1, 4, OIIO::TypeDesc::UINT8, {10, 20, 30, 255});
+    EXPECT_EQ(LoadHeightMap(path, {}).At(0, 0), 0.0f);
+    MapLoadOptions g;
+    g.channel = Channel::G;
+    g.stores = Stores::Depth;
+    EXPECT_EQ(LoadHeightMap(path, g).At(0, 0), Unorm8ToFloat(20));
+}
+
+TEST(ImageIo, SixteenBitAndFloat) {
+    fs::path d = TempDir();
+    std::string p16 = (d / "h.png").string();
+    WriteWithOiio<uint16_t>(p16, 1, 1, 1, OIIO::TypeDesc::UINT16, {65535});
+    HeightField f16 = LoadHeightMap(p16, {});
+    EXPECT_EQ(f16.At(0, 0), 0.0f);
+    EXPECT_TRUE(f16.depth8.empty());
+    std::string pf = (d / "f.exr").string();
+    WriteWithOiio<float>(pf, 2, 1, 1, OIIO::TypeDesc::FLOAT, {0.25f, 1.0f});
+    HeightField ff = LoadHeightMap(pf, {});
+    EXPECT_EQ(ff.At(0, 0), 0.75f);
+    EXPECT_EQ(ff.At(1, 0), 0.0f);
+}
+
+TEST(ImageIo, NanHeightsAreRejected) {
+    fs::path d = TempDir();
+    std::string pf = (d / "nan.exr").string();
+    WriteWithOiio<float>(pf, 2, 1, 1, OIIO::TypeDesc::FLOAT, {0.5f, std::nanf("")});
+    try {
+        LoadHeightMap(pf, {});
+        FAIL();
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("NaN"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("nan.exr"), std::string::npos) << e.what();
+    }
+}
+
+TEST(ImageIo, OutOfRangeFloatHeightsAreRejected) {
+    fs::path d = TempDir();
+    std::string pf = (d / "big.exr").string();
+    WriteWithOiio<float>(pf, 1, 1, 1, OIIO::TypeDesc::FLOAT, {3.0f});
+    EXPECT_THROW(LoadHeightMap(pf, {}), Error);
+}
+
+TEST(ImageIo, MissingAndCorruptFilesNameTheFile) {
+    fs::path d = TempDir();
+    try {
+        LoadHeightMap((d / "missing.png").string(), {});
+        FAIL();
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("missing.png"), std::string::npos);
+    }
+    std::string bad = (d / "corrupt.png").string();
+    std::ofstream(bad) << "this is not a png";
+    EXPECT_THROW(LoadHeightMap(bad, {}), Error);
+    // a truncated PNG: valid header, no data
+    std::string p = (d / "trunc.png").string();
+    WriteWithOiio<uint8_t>(p, 64, 64, 1, OIIO::TypeDesc::UINT8, std::vector<uint8_t>(4096, 7));
+    fs::resize_file(p, 60);
+    EXPECT_THROW(LoadHeightMap(p, {}), Error);
+}
+
+TEST(ImageIo, ChannelBeyondImageIsAnError) {
+    fs::path d = TempDir();
+    std::string path = (d / "g.png").string();
+    WriteWithOiio<uint8_t>(path, 1, 1, 1, OIIO::TypeDesc::UINT8, {1});
+    MapLoadOptions b;
+    b.channel = Channel::B;
+    EXPECT_THROW(LoadHeightMap(path, b), Error);
+}
+
+TEST(ImageIo, EmptyFieldIsRejected) {
+    HeightField f;
+    f.name = "empty";
+    EXPECT_THROW(ValidateHeightField(f), Error);
+}

@@ -1,0 +1,344 @@
+// Cone maps: names, geometry, offsets, encodings, the bilinear safety pass and statistics.
+#include "texture/cone_map.h"
+
+#include <array>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "core/error.h"
+#include "texture/cone_map_detail.h"
+
+namespace reliefsim {
+
+namespace {
+constexpr std::array<std::pair<ConeKind, std::string_view>, 10> kKinds{{
+    {ConeKind::Cone, "cone"},
+    {ConeKind::Relaxed, "relaxed"},
+    {ConeKind::RelaxedExact, "relaxed-exact"},
+    {ConeKind::Quad, "quad"},
+    {ConeKind::Acm4, "acm4"},
+    {ConeKind::Acm8, "acm8"},
+    {ConeKind::ConeNormal, "cone-normal"},
+    {ConeKind::Stacked, "stacked"},
+    {ConeKind::MinMip, "minmip"},
+    {ConeKind::MaxMip, "maxmip"},
+}};
+constexpr std::array<std::pair<ConeEncoding, std::string_view>, 4> kEncodings{{
+    {ConeEncoding::Float, "float"},
+    {ConeEncoding::U8, "u8"},
+    {ConeEncoding::U8Sqrt, "u8sqrt"},
+    {ConeEncoding::U16, "u16"},
+}};
+}  // namespace
+
+std::string_view ToString(ConeKind k) {
+    for (auto& [v, n] : kKinds)
+        if (v == k) return n;
+    return "?";
+}
+std::string_view ToString(ConeEncoding e) {
+    for (auto& [v, n] : kEncodings)
+        if (v == e) return n;
+    return "?";
+}
+std::optional<ConeKind> ParseConeKind(std::string_view s) {
+    for (auto& [v, n] : kKinds)
+        if (n == s) return v;
+    return std::nullopt;
+}
+std::optional<ConeEncoding> ParseConeEncoding(std::string_view s) {
+    for (auto& [v, n] : kEncodings)
+        if (n == s) return v;
+    return std::nullopt;
+}
+std::string ConeKindList() {
+    std::string r;
+    for (auto& [v, n] : kKinds) r += (r.empty() ? "\"" : ", \"") + std::string(n) + "\"";
+    return r;
+}
+std::string ConeEncodingList() {
+    std::string r;
+    for (auto& [v, n] : kEncodings) r += (r.empty() ? "\"" : ", \"") + std::string(n) + "\"";
+    return r;
+}
+
+void ValidateConeMapParams(const ConeMapParams& p) {
+    if (p.searchSteps < 1 || p.searchSteps > 4096)
+        throw Error("--search-steps " + std::to_string(p.searchSteps) +
+                    ": out of range; expected 1..4096 (Listing 18-2 uses 128)");
+    if (p.stackedCount < 1 || p.stackedCount > 16)
+        throw Error("--stacked-count " + std::to_string(p.stackedCount) +
+                    ": out of range; expected 1..16");
+    if (!(p.threshold >= 0.0f && p.threshold <= 1.0f))
+        throw Error("--threshold: must be a depth difference in [0, 1]; 0 searches every texel");
+    if (p.adaptiveLevels < 0 || p.adaptiveLevels > 12)
+        throw Error("--levels " + std::to_string(p.adaptiveLevels) + ": out of range; expected 0..12");
+}
+
+int ChannelCount(ConeKind k, const ConeMapParams& p) {
+    switch (k) {
+        case ConeKind::Quad:
+        case ConeKind::Acm4: return 4;
+        case ConeKind::Acm8: return 8;
+        case ConeKind::Stacked: return p.stackedCount;
+        default: return 1;
+    }
+}
+
+std::vector<std::string> ChannelNames(ConeKind k, const ConeMapParams& p) {
+    switch (k) {
+        case ConeKind::Quad: return {"+x", "-x", "+y", "-y"};
+        case ConeKind::Acm4: return {"s0", "s1", "s2", "s3"};
+        case ConeKind::Acm8: return {"s0", "s1", "s2", "s3", "s4", "s5", "s6", "s7"};
+        case ConeKind::Stacked: {
+            std::vector<std::string> n;
+            for (int i = 0; i < p.stackedCount; ++i) n.push_back("cone" + std::to_string(i));
+            return n;
+        }
+        case ConeKind::ConeNormal: return {"nz"};
+        case ConeKind::MinMip:
+        case ConeKind::MaxMip: return {"depth"};
+        default: return {"ratio"};
+    }
+}
+
+namespace detail {
+
+Geometry MakeGeometry(int w, int h) {
+    Geometry g;
+    g.w = w;
+    g.h = h;
+    const int gc = std::gcd(w, h);
+    const int64_t wq = w / gc, hq = h / gc;
+    g.wx = hq * hq;
+    g.wy = wq * wq;
+    g.scale = double(wq) * double(hq) * double(gc);
+    g.halfX = w / 2;
+    g.halfY = h / 2;
+    return g;
+}
+
+float RatioFromQ(double q, double scale) {
+    if (!(q < kInfQ)) return kConeRatioCap;
+    const double r = std::sqrt(q) / scale;
+    if (!(r < double(kConeRatioCap))) return kConeRatioCap;
+    float f = float(r);
+    // Round down, then one more ulp when the float sits within double rounding of the value:
+    // the stored ratio is then strictly below the exact real ratio (conservative).
+    if (double(f) > r) f = std::nextafter(f, 0.0f);
+    if (double(f) >= r * (1.0 - 1e-14) && f > 0.0f) f = std::nextafter(f, 0.0f);
+    return f;
+}
+
+int SectorCount(ConeKind kind) {
+    switch (kind) {
+        case ConeKind::Quad:
+        case ConeKind::Acm4: return 4;
+        case ConeKind::Acm8: return 8;
+        default: return 1;
+    }
+}
+
+uint8_t SectorMask(ConeKind kind, const Geometry& g, int dx, int dy) {
+    // Directions in uv space scaled by W*H: (dx * H, dy * W), exact integers.
+    const int64_t vx = int64_t(dx) * g.h, vy = int64_t(dy) * g.w;
+    switch (kind) {
+        case ConeKind::Quad:
+            return uint8_t((vx > 0 ? 1 : 0) | (vx < 0 ? 2 : 0) | (vy > 0 ? 4 : 0) |
+                           (vy < 0 ? 8 : 0));
+        case ConeKind::Acm4:
+        case ConeKind::Acm8: {
+            static constexpr int kB4[5][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}, {1, 0}};
+            static constexpr int kB8[9][2] = {{1, 0},  {1, 1},   {0, 1},  {-1, 1}, {-1, 0},
+                                              {-1, -1}, {0, -1}, {1, -1}, {1, 0}};
+            const int n = kind == ConeKind::Acm4 ? 4 : 8;
+            uint8_t m = 0;
+            for (int k = 0; k < n; ++k) {
+                const int* a = kind == ConeKind::Acm4 ? kB4[k] : kB8[k];
+                const int* b = kind == ConeKind::Acm4 ? kB4[k + 1] : kB8[k + 1];
+                const int64_t c1 = a[0] * vy - a[1] * vx;  // cross(a, v) >= 0
+                const int64_t c2 = vx * b[1] - vy * b[0];  // cross(v, b) >= 0
+                if (c1 >= 0 && c2 >= 0) m |= uint8_t(1u << k);
+            }
+            return m;
+        }
+        default: return 1;
+    }
+}
+
+std::vector<Offset> MakeOffsets(const Geometry& g, ConeKind sectors) {
+    std::vector<Offset> offs;
+    offs.reserve(size_t(2 * g.halfX + 1) * size_t(2 * g.halfY + 1));
+    for (int dy = -g.halfY; dy <= g.halfY; ++dy)
+        for (int dx = -g.halfX; dx <= g.halfX; ++dx) {
+            if (dx == 0 && dy == 0) continue;
+            offs.push_back({dx, dy, g.S(dx, dy), SectorMask(sectors, g, dx, dy)});
+        }
+    return offs;
+}
+
+TiledOffsets MakeTiledOffsets(const Geometry& g, ConeKind sectors) {
+    TiledOffsets to;
+    const int nx = (2 * g.halfX + 1 + kTile - 1) / kTile;
+    const int ny = (2 * g.halfY + 1 + kTile - 1) / kTile;
+    for (int ty = 0; ty < ny; ++ty)
+        for (int tx = 0; tx < nx; ++tx) {
+            OffsetTile t;
+            t.ox = -g.halfX + tx * kTile;
+            t.oy = -g.halfY + ty * kTile;
+            t.begin = int(to.offsets.size());
+            t.minS = std::numeric_limits<int64_t>::max();
+            t.mask = 0;
+            for (int dy = t.oy; dy < std::min(t.oy + kTile, g.halfY + 1); ++dy)
+                for (int dx = t.ox; dx < std::min(t.ox + kTile, g.halfX + 1); ++dx) {
+                    if (dx == 0 && dy == 0) continue;
+                    Offset o{dx, dy, g.S(dx, dy), SectorMask(sectors, g, dx, dy)};
+                    to.offsets.push_back(o);
+                    t.minS = std::min(t.minS, o.s);
+                    t.mask |= o.mask;
+                }
+            t.end = int(to.offsets.size());
+            if (t.end > t.begin) to.tiles.push_back(t);
+        }
+    std::stable_sort(to.tiles.begin(), to.tiles.end(),
+                     [](const OffsetTile& a, const OffsetTile& b) { return a.minS < b.minS; });
+    return to;
+}
+
+std::vector<float> WindowMin(const HeightField& hf) {
+    const int W = hf.width, H = hf.height;
+    std::vector<float> rowMin(size_t(W) * size_t(H)), out(size_t(W) * size_t(H));
+    for (int j = 0; j < H; ++j)
+        for (int i = 0; i < W; ++i) {
+            float m = hf.At(i, j);
+            for (int k = 1; k < kTile; ++k) m = std::min(m, hf.At(Wrap(i + k, W), j));
+            rowMin[size_t(j) * size_t(W) + size_t(i)] = m;
+        }
+    for (int j = 0; j < H; ++j)
+        for (int i = 0; i < W; ++i) {
+            float m = rowMin[size_t(j) * size_t(W) + size_t(i)];
+            for (int k = 1; k < kTile; ++k)
+                m = std::min(m, rowMin[size_t(Wrap(j + k, H)) * size_t(W) + size_t(i)]);
+            out[size_t(j) * size_t(W) + size_t(i)] = m;
+        }
+    return out;
+}
+
+float CheckedMinDepth(const HeightField& hf) {
+    if (hf.width <= 0 || hf.height <= 0)
+        throw Error("height map \"" + hf.name + "\": zero size (" + std::to_string(hf.width) +
+                    "x" + std::to_string(hf.height) + "); expected at least 1x1");
+    if (hf.depth.size() != size_t(hf.width) * size_t(hf.height))
+        throw Error("height map \"" + hf.name + "\": has " + std::to_string(hf.depth.size()) +
+                    " depths, expected width*height");
+    ValidateHeightField(hf);
+    float m = hf.depth[0];
+    for (float d : hf.depth) m = std::min(m, d);
+    return m;
+}
+
+}  // namespace detail
+
+float DecodeRatio(uint16_t code, ConeEncoding enc) {
+    switch (enc) {
+        case ConeEncoding::U8: return Unorm8ToFloat(uint8_t(code));
+        case ConeEncoding::U8Sqrt: {
+            const float s = Unorm8ToFloat(uint8_t(code));
+            return s * s;
+        }
+        case ConeEncoding::U16: return float(code) * float(1.0 / 65535.0);
+        default: return float(code);
+    }
+}
+
+uint16_t EncodeRatio(float ratio, ConeEncoding enc) {
+    if (!(ratio > 0.0f)) return 0;
+    const float r = std::min(ratio, 1.0f);
+    int code = 0, maxCode = enc == ConeEncoding::U16 ? 65535 : 255;
+    switch (enc) {
+        case ConeEncoding::U8: code = int(std::floor(double(r) * 255.0)); break;
+        case ConeEncoding::U8Sqrt: code = int(std::floor(std::sqrt(double(r)) * 255.0)); break;
+        case ConeEncoding::U16: code = int(std::floor(double(r) * 65535.0)); break;
+        default: return 0;
+    }
+    code = std::clamp(code, 0, maxCode);
+    // The decoder's float arithmetic may land above the ratio: step down until it does not.
+    while (code > 0 && DecodeRatio(uint16_t(code), enc) > ratio) --code;
+    return uint16_t(code);
+}
+
+ConeMap QuantizeConeMap(const ConeMap& m, ConeEncoding enc, std::vector<uint16_t>* codes) {
+    ConeMap out = m;
+    if (codes) codes->assign(m.values.size(), 0);
+    if (enc == ConeEncoding::Float) return out;
+    for (size_t i = 0; i < m.values.size(); ++i) {
+        const uint16_t c = EncodeRatio(m.values[i], enc);
+        out.values[i] = DecodeRatio(c, enc);
+        if (codes) (*codes)[i] = c;
+    }
+    return out;
+}
+
+ConeMap BilinearSafetyPass(const ConeMap& m) {
+    ConeMap out = m;
+    const int W = m.width, H = m.height, C = m.channels;
+    for (int j = 0; j < H; ++j)
+        for (int i = 0; i < W; ++i)
+            for (int c = 0; c < C; ++c) {
+                float v = m.At(i, j, c);
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dx = -1; dx <= 1; ++dx)
+                        v = std::min(v, m.At(detail::Wrap(i + dx, W), detail::Wrap(j + dy, H), c));
+                out.values[(size_t(j) * size_t(W) + size_t(i)) * size_t(C) + size_t(c)] = v;
+            }
+    return out;
+}
+
+ConeMapStats ComputeConeMapStats(const ConeMap& m, int bins) {
+    ConeMapStats s;
+    s.histogram.assign(size_t(std::max(bins, 1)), 0);
+    double sum = 0;
+    bool first = true;
+    for (float v : m.values) {
+        if (v >= kConeRatioCap) {
+            ++s.nUnbounded;
+            continue;
+        }
+        const double d = double(v);
+        if (first) {
+            s.minRatio = s.maxRatio = d;
+            first = false;
+        }
+        s.minRatio = std::min(s.minRatio, d);
+        s.maxRatio = std::max(s.maxRatio, d);
+        sum += d;
+        ++s.nValues;
+        int b = int(std::floor(d * double(s.histogram.size())));
+        b = std::clamp(b, 0, int(s.histogram.size()) - 1);
+        ++s.histogram[size_t(b)];
+    }
+    s.meanRatio = s.nValues ? sum / double(s.nValues) : 0.0;
+    return s;
+}
+
+std::string ConeMapStatsJson(const ConeMap& m, const ConeMapStats& s, ConeEncoding enc) {
+    nlohmann::json j;
+    j["kind"] = std::string(ToString(m.kind));
+    j["encoding"] = std::string(ToString(enc));
+    j["width"] = m.width;
+    j["height"] = m.height;
+    j["channels"] = m.channels;
+    j["min"] = s.minRatio;
+    j["mean"] = s.meanRatio;
+    j["max"] = s.maxRatio;
+    j["values"] = s.nValues;
+    j["unbounded"] = s.nUnbounded;
+    j["histogram_range"] = {0.0, 1.0};
+    j["histogram"] = s.histogram;
+    return j.dump(2);
+}
+
+}  // namespace reliefsim

@@ -1,0 +1,161 @@
+// Internals shared by the cone-map generators: geometry, exact candidate arithmetic, the tiled
+// pruned search. Not part of the public API.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include "texture/cone_map.h"
+
+namespace reliefsim::detail {
+
+constexpr int kMaxSectors = 8;
+constexpr double kInfQ = std::numeric_limits<double>::infinity();
+
+/// Integer geometry of a W x H texture. The squared uv distance of a texel offset (dx, dy) is
+/// S / scale^2 with S = dx^2 * hq^2 + dy^2 * wq^2 an exact integer (wq = W/g, hq = H/g,
+/// g = gcd(W, H), scale = wq * hq * g); for square maps S = dx^2 + dy^2 and scale = W.
+struct Geometry {
+    int w = 0, h = 0;
+    int64_t wx = 1;  ///< weight of dx^2 (hq^2)
+    int64_t wy = 1;  ///< weight of dy^2 (wq^2)
+    double scale = 1;
+    int halfX = 0, halfY = 0;  ///< offsets run over [-half, half] (both images at W/2 for even W)
+    int64_t S(int dx, int dy) const { return int64_t(dx) * dx * wx + int64_t(dy) * dy * wy; }
+};
+Geometry MakeGeometry(int w, int h);
+
+/// The one candidate formula every exact generator uses: q = S / (a - b)^2 in double, where a is
+/// the apex depth and b the blocker depth (b < a). Both operations round monotonically, so a
+/// bound computed with a smaller b or a smaller S is never larger: the pruning is exact.
+inline double CandidateQ(int64_t s, float apex, float blocker) {
+    const double dd = double(apex) - double(blocker);
+    return double(s) / (dd * dd);
+}
+
+/// Ratio from the minimal q: sqrt(q)/scale, rounded to a float strictly not above the exact
+/// value (one ulp down when the double result sits on or next to a float). Capped.
+float RatioFromQ(double q, double scale);
+
+/// A texel offset with its exact squared distance and sector mask.
+struct Offset {
+    int dx, dy;
+    int64_t s;
+    uint8_t mask;
+};
+struct OffsetTile {
+    int begin, end;  ///< range in TiledOffsets::offsets
+    int ox, oy;      ///< window origin relative to the apex texel (tile covers ox..ox+7)
+    int64_t minS;
+    uint8_t mask;
+};
+constexpr int kTile = 8;
+
+/// Sector masks: bit k set when the offset lies in closed sector k of `kind`
+/// (Cone: bit 0 always).
+uint8_t SectorMask(ConeKind kind, const Geometry& g, int dx, int dy);
+int SectorCount(ConeKind kind);
+
+/// All offsets of the wrap range (except 0,0) grouped in 8x8 tiles, tiles sorted by minS.
+struct TiledOffsets {
+    std::vector<Offset> offsets;
+    std::vector<OffsetTile> tiles;
+};
+TiledOffsets MakeTiledOffsets(const Geometry& g, ConeKind sectors);
+/// The same offsets in plain scan order (for brute force).
+std::vector<Offset> MakeOffsets(const Geometry& g, ConeKind sectors);
+
+/// win[j*W+i] = min depth over the 8x8 window starting at texel (i, j), wrapped.
+std::vector<float> WindowMin(const HeightField& hf);
+
+inline int Wrap(int i, int n) {
+    int r = i % n;
+    return r < 0 ? r + n : r;
+}
+
+/// Validates the field and returns min depth.
+float CheckedMinDepth(const HeightField& hf);
+
+/// The tiled exact search for one apex. best[k] holds the running minimum q per sector (seed
+/// with kInfQ or a parent's bound). accept(bx, by, off) filters blockers (e.g. limiting texels).
+template <class Accept>
+void TiledSearch(const HeightField& hf, const TiledOffsets& to, const std::vector<float>& win,
+                 float dmin, int ti, int tj, float apex, int nSectors, double* best,
+                 Accept&& accept) {
+    const int W = hf.width, H = hf.height;
+    if (!(apex > dmin)) return;
+    const uint8_t all = uint8_t((1u << nSectors) - 1u);
+    auto maxBest = [&] {
+        double m = 0;
+        for (int k = 0; k < nSectors; ++k) m = std::max(m, best[k]);
+        return m;
+    };
+    double mb = maxBest();
+    for (const OffsetTile& t : to.tiles) {
+        const double lbGlobal = CandidateQ(t.minS, apex, dmin);
+        if (lbGlobal >= mb) break;
+        const float wmin = win[size_t(Wrap(tj + t.oy, H)) * size_t(W) + size_t(Wrap(ti + t.ox, W))];
+        if (!(wmin < apex)) continue;
+        const double lbTile = CandidateQ(t.minS, apex, wmin);
+        uint8_t open = 0;
+        for (int k = 0; k < nSectors; ++k)
+            if ((t.mask >> k & 1u) && lbTile < best[k]) open |= uint8_t(1u << k);
+        if (!open) continue;
+        bool changed = false;
+        for (int o = t.begin; o < t.end; ++o) {
+            const Offset& off = to.offsets[size_t(o)];
+            if (!(off.mask & open)) continue;
+            const int bx = Wrap(ti + off.dx, W), by = Wrap(tj + off.dy, H);
+            const float b = hf.depth[size_t(by) * size_t(W) + size_t(bx)];
+            if (!(b < apex)) continue;
+            if (!accept(bx, by, off)) continue;
+            const double q = CandidateQ(off.s, apex, b);
+            for (int k = 0; k < nSectors; ++k)
+                if ((off.mask >> k & 1u) && q < best[k]) {
+                    best[k] = q;
+                    changed = true;
+                }
+        }
+        if (changed) mb = maxBest();
+        (void)all;
+    }
+}
+
+/// Brute force: every offset, no pruning, same arithmetic.
+template <class Accept>
+void BruteSearch(const HeightField& hf, const std::vector<Offset>& offs, int ti, int tj,
+                 float apex, int nSectors, double* best, Accept&& accept) {
+    const int W = hf.width, H = hf.height;
+    for (const Offset& off : offs) {
+        const int bx = Wrap(ti + off.dx, W), by = Wrap(tj + off.dy, H);
+        const float b = hf.depth[size_t(by) * size_t(W) + size_t(bx)];
+        if (!(b < apex)) continue;
+        if (!accept(bx, by, off)) continue;
+        const double q = CandidateQ(off.s, apex, b);
+        for (int k = 0; k < nSectors; ++k)
+            if ((off.mask >> k & 1u) && q < best[k]) best[k] = q;
+    }
+}
+
+/// Bán et al.'s limiting test: the blocker's outward neighbour (one texel further along the
+/// offset direction, rounded to the 8-neighbourhood) is strictly deeper than the blocker.
+inline bool IsLimiting(const HeightField& hf, int bx, int by, int dx, int dy) {
+    const int m = std::max(std::abs(dx), std::abs(dy));
+    const int sx = (2 * std::abs(dx) >= m) ? (dx > 0 ? 1 : -1) : 0;
+    const int sy = (2 * std::abs(dy) >= m) ? (dy > 0 ? 1 : -1) : 0;
+    const int nx = Wrap(bx + sx, hf.width), ny = Wrap(by + sy, hf.height);
+    return hf.At(nx, ny) > hf.At(bx, by);
+}
+
+/// Listing 18-2 for one (source, offset) pair in float (GPU) arithmetic; NaN-free: returns
+/// +inf for the destinations the listing ignores (depth 0 gives a NaN ratio there).
+float RelaxedPairRatio(const HeightField& hf, int ti, int tj, int dx, int dy, int steps);
+
+/// Conservative ratio of every texel by levels + distance transforms (exact; 8-bit or few
+/// distinct depths). Writes q per texel.
+void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector<double>& q);
+
+}  // namespace reliefsim::detail

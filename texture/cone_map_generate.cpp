@@ -1,0 +1,267 @@
+// Cone-family generators: fast exact versions (levels + distance transforms, tiled pruned
+// searches), their brute-force oracles, the relaxed Listing 18-2 definition and adaptive ACM.
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "core/error.h"
+#include "texture/cone_map.h"
+#include "texture/cone_map_detail.h"
+
+namespace reliefsim {
+
+namespace detail {
+
+namespace {
+
+float NearestWrap(const HeightField& hf, float u, float v) {
+    const float fi = std::floor(u * float(hf.width)), fj = std::floor(v * float(hf.height));
+    const int i = Wrap(int(std::fmod(double(fi), double(hf.width))), hf.width);
+    const int j = Wrap(int(std::fmod(double(fj), double(hf.height))), hf.height);
+    return hf.At(i, j);
+}
+
+/// Round a double value (>= 0) down to a float strictly below it unless exact zero.
+float RoundDownStrict(double r) {
+    if (!(r < double(kConeRatioCap))) return kConeRatioCap;
+    float f = float(r);
+    if (double(f) > r) f = std::nextafter(f, 0.0f);
+    if (double(f) >= r * (1.0 - 1e-14) && f > 0.0f) f = std::nextafter(f, 0.0f);
+    return f;
+}
+
+/// n_z of the cone side normal from a ratio r: r / sqrt(1 + r^2); 1 for an unbounded cone.
+float ConeNormalFromRatio(double r) {
+    if (!(r < double(kConeRatioCap))) return 1.0f;
+    return RoundDownStrict(r / std::sqrt(1.0 + r * r));
+}
+
+template <class F>
+void ForEachRow(int H, F&& f) {
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
+        for (int j = r.begin(); j < r.end(); ++j) f(j);
+    });
+}
+
+bool UseLevels(const HeightField& hf) {
+    if (!hf.depth8.empty()) return true;
+    std::vector<float> v(hf.depth);
+    std::sort(v.begin(), v.end());
+    return std::unique(v.begin(), v.end()) - v.begin() <= 300;
+}
+
+}  // namespace
+
+float RelaxedPairRatio(const HeightField& hf, int ti, int tj, int dx, int dy, int steps) {
+    const float W = float(hf.width), H = float(hf.height);
+    const float sx = (float(ti) + 0.5f) / W, sy = (float(tj) + 0.5f) / H;
+    const float dstx = sx + float(dx) / W, dsty = sy + float(dy) / H;
+    const float dstz = NearestWrap(hf, dstx, dsty);
+    if (!(dstz > 0.0f)) return std::numeric_limits<float>::infinity();  // NaN in the listing
+    float vx = dstx - sx, vy = dsty - sy, vz = dstz;
+    vx /= vz;
+    vy /= vz;
+    vz /= vz;
+    const float scale = 1.0f - dstz;
+    vx *= scale;
+    vy *= scale;
+    vz *= scale;
+    const float fs = float(steps);
+    const float stx = vx / fs, sty = vy / fs, stz = vz / fs;
+    float px = dstx + stx, py = dsty + sty, pz = dstz + stz;
+    for (int i = 1; i < steps; ++i) {
+        if (NearestWrap(hf, px, py) <= pz) {
+            px += stx;
+            py += sty;
+            pz += stz;
+        } else {
+            break;  // the listing keeps sampling the same point from here on: same result
+        }
+    }
+    const float src = hf.At(ti, tj);
+    if (pz >= src) return 1.0f;
+    const float ex = px - sx, ey = py - sy;
+    return std::sqrt(ex * ex + ey * ey) / (src - pz);
+}
+
+}  // namespace detail
+
+namespace {
+
+using namespace detail;
+
+enum class Mode { Fast, Brute, Plain };
+
+/// Apex depth of stacked cone k of K: d * (K - k) / K (k = 0: the surface point).
+float StackedApex(float d, int k, int K) { return d * (float(K - k) / float(K)); }
+
+ConeMap MakeMap(const HeightField& hf, ConeKind kind, int channels) {
+    ConeMap m;
+    m.kind = kind;
+    m.width = hf.width;
+    m.height = hf.height;
+    m.channels = channels;
+    m.values.assign(size_t(hf.width) * size_t(hf.height) * size_t(channels), 0.0f);
+    return m;
+}
+
+/// Conservative / sector / relaxed-exact / stacked: q per texel and channel.
+ConeMap SearchMap(const HeightField& hf, ConeKind kind, const ConeMapParams& p, Mode mode) {
+    const float dmin = CheckedMinDepth(hf);
+    const Geometry g = MakeGeometry(hf.width, hf.height);
+    const ConeKind sectors = (kind == ConeKind::Quad || kind == ConeKind::Acm4 ||
+                              kind == ConeKind::Acm8)
+                                 ? kind
+                                 : ConeKind::Cone;
+    const int nS = SectorCount(sectors);
+    const int C = kind == ConeKind::Stacked ? p.stackedCount : nS;
+    const bool limiting = kind == ConeKind::RelaxedExact;
+    const ConeKind outKind = kind;
+    ConeMap m = MakeMap(hf, outKind, C);
+    const int W = hf.width;
+
+    if (mode == Mode::Fast && (kind == ConeKind::Cone || kind == ConeKind::ConeNormal) &&
+        UseLevels(hf)) {
+        std::vector<double> q;
+        ConservativeQByLevels(hf, g, q);
+        for (size_t t = 0; t < q.size(); ++t)
+            m.values[t] = kind == ConeKind::ConeNormal
+                              ? ConeNormalFromRatio(std::sqrt(q[t]) / g.scale)
+                              : RatioFromQ(q[t], g.scale);
+        return m;
+    }
+
+    TiledOffsets to;
+    std::vector<Offset> offs;
+    std::vector<float> win;
+    if (mode == Mode::Brute) offs = MakeOffsets(g, sectors);
+    else {
+        to = MakeTiledOffsets(g, sectors);
+        win = WindowMin(hf);
+    }
+    auto accept = [&](int bx, int by, const Offset& o) {
+        return !limiting || IsLimiting(hf, bx, by, o.dx, o.dy);
+    };
+    ForEachRow(hf.height, [&](int j) {
+        for (int i = 0; i < W; ++i) {
+            const float d = hf.At(i, j);
+            double best[kMaxSectors * 2];
+            for (int c = 0; c < C; ++c) {
+                const int nSearch = kind == ConeKind::Stacked ? 1 : nS;
+                const float apex = kind == ConeKind::Stacked ? StackedApex(d, c, C) : d;
+                if (kind != ConeKind::Stacked && c > 0) break;
+                std::fill(best, best + kMaxSectors * 2, kInfQ);
+                if (mode == Mode::Brute) BruteSearch(hf, offs, i, j, apex, nSearch, best, accept);
+                else TiledSearch(hf, to, win, dmin, i, j, apex, nSearch, best, accept);
+                float* out = &m.values[(size_t(j) * size_t(W) + size_t(i)) * size_t(C)];
+                if (kind == ConeKind::Stacked) out[c] = RatioFromQ(best[0], g.scale);
+                else if (kind == ConeKind::ConeNormal)
+                    out[0] = ConeNormalFromRatio(std::sqrt(best[0]) / g.scale);
+                else
+                    for (int k = 0; k < nS; ++k) out[k] = RatioFromQ(best[k], g.scale);
+            }
+        }
+    });
+    return m;
+}
+
+/// Listing 18-1/18-2 relaxed ratios (float arithmetic, cap 1 as in the listing).
+ConeMap RelaxedMap(const HeightField& hf, const ConeMapParams& p, Mode mode, bool normal) {
+    const float dmin = CheckedMinDepth(hf);
+    const Geometry g = MakeGeometry(hf.width, hf.height);
+    ConeMap m = MakeMap(hf, normal ? ConeKind::ConeNormal : ConeKind::Relaxed, 1);
+    const int W = hf.width, H = hf.height;
+    TiledOffsets to;
+    std::vector<Offset> offs;
+    std::vector<float> win;
+    if (mode == Mode::Brute) offs = MakeOffsets(g, ConeKind::Cone);
+    else {
+        to = MakeTiledOffsets(g, ConeKind::Cone);
+        win = WindowMin(hf);
+    }
+    // Pruning: the listing's ratio for destination b is, in exact arithmetic, at least
+    // |offset| / (d_src - d_b) (the exit point lies beyond b on the ray from the top). The
+    // float march can fall short of that by rounding, so bounds carry a 2% margin.
+    constexpr double kMargin = 1.02;
+    ForEachRow(H, [&](int j) {
+        for (int i = 0; i < W; ++i) {
+            const float d = hf.At(i, j);
+            float best = 1.0f;
+            auto consider = [&](const Offset& o) {
+                const int bx = Wrap(i + o.dx, W), by = Wrap(j + o.dy, H);
+                const float b = hf.At(bx, by);
+                if (!(b < d)) return;  // exit point deeper than the source: ratio 1
+                const float r = RelaxedPairRatio(hf, i, j, o.dx, o.dy, p.searchSteps);
+                if (best > r) best = r;
+            };
+            if (mode == Mode::Brute) {
+                for (const Offset& o : offs) {
+                    const float r = RelaxedPairRatio(hf, i, j, o.dx, o.dy, p.searchSteps);
+                    if (best > r) best = r;
+                }
+            } else if (d > dmin) {
+                for (const OffsetTile& t : to.tiles) {
+                    const double dist = std::sqrt(double(t.minS)) / g.scale;
+                    if (dist / (double(d) - double(dmin)) > double(best) * kMargin) break;
+                    const float wmin =
+                        win[size_t(Wrap(j + t.oy, H)) * size_t(W) + size_t(Wrap(i + t.ox, W))];
+                    if (!(wmin < d)) continue;
+                    if (dist / (double(d) - double(wmin)) > double(best) * kMargin) continue;
+                    for (int o = t.begin; o < t.end; ++o) {
+                        const Offset& off = to.offsets[size_t(o)];
+                        const int bx = Wrap(i + off.dx, W), by = Wrap(j + off.dy, H);
+                        const float b = hf.At(bx, by);
+                        if (!(b < d)) continue;
+                        const double lb = std::sqrt(double(off.s)) / g.scale /
+                                          (double(d) - double(b));
+                        if (lb > double(best) * kMargin) continue;
+                        consider(off);
+                    }
+                }
+            }
+            m.values[size_t(j) * size_t(W) + size_t(i)] =
+                normal ? ConeNormalFromRatio(double(best)) : best;
+        }
+    });
+    return m;
+}
+
+}  // namespace
+
+ConeMap GenerateConeMapImpl(const HeightField& hf, ConeKind kind, const ConeMapParams& p,
+                            Mode mode) {
+    ValidateConeMapParams(p);
+    switch (kind) {
+        case ConeKind::Relaxed: return RelaxedMap(hf, p, mode, false);
+        case ConeKind::ConeNormal:
+            if (p.relaxedNormal) return RelaxedMap(hf, p, mode, true);
+            return SearchMap(hf, kind, p, mode);
+        case ConeKind::MinMip:
+        case ConeKind::MaxMip:
+            throw Error("--kind " + std::string(ToString(kind)) +
+                        ": a mip pyramid, not a cone map; use BuildMipPyramid (texture/mip_pyramid.h)");
+        default: return SearchMap(hf, kind, p, mode);
+    }
+}
+
+ConeMap GenerateConeMap(const HeightField& hf, ConeKind kind, const ConeMapParams& p) {
+    if (p.adaptive && (kind == ConeKind::Cone || kind == ConeKind::Quad ||
+                       kind == ConeKind::Acm4 || kind == ConeKind::Acm8)) {
+        ValidateConeMapParams(p);
+        return GenerateAdaptiveSectorMap(hf, kind, p.threshold, p.adaptiveLevels);
+    }
+    return GenerateConeMapImpl(hf, kind, p, Mode::Fast);
+}
+
+ConeMap GenerateConeMapBruteForce(const HeightField& hf, ConeKind kind, const ConeMapParams& p) {
+    return GenerateConeMapImpl(hf, kind, p, Mode::Brute);
+}
+
+ConeMap GenerateSectorMapPlainSearch(const HeightField& hf, ConeKind kind) {
+    return SearchMap(hf, kind, {}, Mode::Plain);
+}
+
+}  // namespace reliefsim
