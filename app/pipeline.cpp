@@ -3,7 +3,9 @@
 
 #include <unistd.h>
 
+#include <charconv>
 #include <chrono>
+#include <cstdlib>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -46,6 +48,14 @@ void ValidateSettings(const RenderSettings& s) {
 }
 
 namespace {
+
+// A float setting as the shortest decimal that round-trips (0.1f prints as 0.1, not
+// 0.10000000149011612), so metrics.json reads like the command line that made it.
+double ShortestDouble(float f) {
+    char buf[32];
+    auto res = std::to_chars(buf, buf + sizeof buf, f);
+    return std::strtod(std::string(buf, res.ptr).c_str(), nullptr);
+}
 
 Camera SettingsCamera(const RenderSettings& s) {
     return MakeOrbitCamera(s.viewAngle, s.azimuth, s.distance, s.fovY,
@@ -226,12 +236,12 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
     j["map_height"] = field.height;
     j["width"] = s.width;
     j["height"] = s.height;
-    j["view_angle"] = s.viewAngle;
-    j["azimuth"] = s.azimuth;
-    j["distance"] = s.distance;
-    j["fov"] = s.fovY;
-    j["depth_scale"] = s.depthScale;
-    j["tiling"] = s.tiling;
+    j["view_angle"] = ShortestDouble(s.viewAngle);
+    j["azimuth"] = ShortestDouble(s.azimuth);
+    j["distance"] = ShortestDouble(s.distance);
+    j["fov"] = ShortestDouble(s.fovY);
+    j["depth_scale"] = ShortestDouble(s.depthScale);
+    j["tiling"] = ShortestDouble(s.tiling);
     j["filter"] = std::string(ToString(s.sampler.filter));
     j["wrap"] = std::string(ToString(s.sampler.wrap));
     j["covered_pixels"] = m.coveredPixels;
@@ -253,8 +263,9 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
     j["helper_texel_reads"] = out.record.nHelperTexelReads;
     j["lane_fetches_4x2"] = m.laneFetches4x2;
     j["lane_fetches_8x4"] = m.laneFetches8x4;
-    j["heatmap_scale"] = {{"iterations", {s.iterScaleMin, s.iterScaleMax}},
-                          {"fetches", {s.fetchScaleMin, s.fetchScaleMax}}};
+    j["heatmap_scale"] = {
+        {"iterations", {ShortestDouble(s.iterScaleMin), ShortestDouble(s.iterScaleMax)}},
+        {"fetches", {ShortestDouble(s.fetchScaleMin), ShortestDouble(s.fetchScaleMax)}}};
     j["timing"] = {{"frame_seconds", out.frameSeconds}, {"threads", out.threads}};
     return j;
 }

@@ -22,7 +22,7 @@ struct RenderSettings {
     int width = 512, height = 512;
     float viewAngle = 45.0f;   ///< degrees from the plane normal, [0, 90)
     float azimuth = 0.0f;      ///< degrees around the normal
-    float distance = 1.25f;    ///< camera distance from the plane centre, plane units
+    float distance = 1.0f;     ///< camera distance from the plane centre, plane units
     float fovY = 45.0f;        ///< vertical field of view, degrees
     float depthScale = 0.1f;   ///< relief depth in plane units; > 0
     float tiling = 1.0f;       ///< texture repeats across the plane; > 0
