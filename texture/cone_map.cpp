@@ -267,6 +267,7 @@ uint16_t EncodeRatio(float ratio, ConeEncoding enc) {
     code = std::clamp(code, 0, maxCode);
     // The decoder's float arithmetic may land above the ratio: step down until it does not.
     while (code > 0 && DecodeRatio(uint16_t(code), enc) > ratio) --code;
+    while (code < maxCode && DecodeRatio(uint16_t(code + 1), enc) <= ratio) ++code;
     return uint16_t(code);
 }
 

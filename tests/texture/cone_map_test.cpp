@@ -1,0 +1,344 @@
+// Cone-map generators: fast == brute force bit for bit, conservativeness, encodings, adaptive,
+// safety pass, cache, mip pyramids, bad input.
+#include "texture/cone_map.h"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.h"
+#include "texture/map_cache.h"
+#include "texture/mip_pyramid.h"
+#include "texture/procedural.h"
+#include "texture/sampler.h"
+
+namespace reliefsim {
+namespace {
+
+HeightField RandomField(int w, int h, uint64_t seed, bool smooth) {
+    HeightField hf;
+    hf.width = w;
+    hf.height = h;
+    hf.name = "random";
+    hf.depth.resize(size_t(w) * size_t(h));
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i) {
+            const uint64_t r = Mix64(seed * 1000003ull + uint64_t(j) * uint64_t(w) + uint64_t(i));
+            float v = float(r >> 40) * (1.0f / 16777216.0f);
+            if (smooth) {  // blobs: mostly flat regions with some random texels on top
+                v = (v < 0.9f) ? 0.5f + 0.4f * std::sin(float(i) * 0.3f) * std::cos(float(j) * 0.2f)
+                               : v * 0.5f;
+                v = std::clamp(v, 0.0f, 1.0f);
+            }
+            hf.depth[size_t(j) * size_t(w) + size_t(i)] = v;
+        }
+    return hf;
+}
+
+void ExpectBitEqual(const ConeMap& a, const ConeMap& b, const std::string& what) {
+    ASSERT_EQ(a.values.size(), b.values.size()) << what;
+    size_t bad = 0, first = 0;
+    for (size_t i = 0; i < a.values.size(); ++i)
+        if (std::memcmp(&a.values[i], &b.values[i], sizeof(float)) != 0) {
+            if (!bad) first = i;
+            ++bad;
+        }
+    EXPECT_EQ(bad, 0u) << what << ": first mismatch at value " << first << ": "
+                       << (bad ? a.values[first] : 0.0f) << " vs " << (bad ? b.values[first] : 0.0f);
+}
+
+std::vector<HeightField> Fields(int n) {
+    std::vector<HeightField> v;
+    v.push_back(RandomField(n, n, 7, false));
+    v.push_back(RandomField(n, n, 8, true));
+    v.push_back(QuantizeToUnorm8(RandomField(n, n, 9, true)));
+    v.push_back(MakeBuiltinMap("shapes", n, n));
+    v.push_back(QuantizeToUnorm8(MakeBuiltinMap("bumps", n, n)));
+    v.push_back(MakeBuiltinMap("steps", n, n));
+    return v;
+}
+
+TEST(ConeMap, FastEqualsBruteForceAt32) {
+    for (const HeightField& hf : Fields(32))
+        for (ConeKind k : {ConeKind::Cone, ConeKind::Quad, ConeKind::Acm4, ConeKind::Acm8,
+                           ConeKind::RelaxedExact, ConeKind::Stacked, ConeKind::ConeNormal})
+            ExpectBitEqual(GenerateConeMap(hf, k), GenerateConeMapBruteForce(hf, k),
+                           hf.name + " " + std::string(ToString(k)));
+}
+
+TEST(ConeMap, FastEqualsBruteForceAt64) {
+    for (const HeightField& hf : Fields(64))
+        for (ConeKind k : {ConeKind::Cone, ConeKind::Acm4, ConeKind::RelaxedExact})
+            ExpectBitEqual(GenerateConeMap(hf, k), GenerateConeMapBruteForce(hf, k),
+                           hf.name + " " + std::string(ToString(k)));
+}
+
+TEST(ConeMap, FastEqualsBruteForceAt128) {
+    const HeightField a = QuantizeToUnorm8(MakeBuiltinMap("shapes", 128, 128));
+    ExpectBitEqual(GenerateConeMap(a, ConeKind::Cone), GenerateConeMapBruteForce(a, ConeKind::Cone),
+                   "shapes 8-bit 128");
+    const HeightField b = RandomField(128, 128, 11, true);
+    ExpectBitEqual(GenerateConeMap(b, ConeKind::Quad), GenerateConeMapBruteForce(b, ConeKind::Quad),
+                   "random float 128 quad");
+}
+
+TEST(ConeMap, NonSquareAndOddSizesMatchBruteForce) {
+    for (auto [w, h] : {std::pair{24, 40}, std::pair{33, 17}, std::pair{1, 9}, std::pair{5, 5}}) {
+        const HeightField hf = RandomField(w, h, 3, true);
+        for (ConeKind k : {ConeKind::Cone, ConeKind::Acm8, ConeKind::Quad, ConeKind::RelaxedExact})
+            ExpectBitEqual(GenerateConeMap(hf, k), GenerateConeMapBruteForce(hf, k),
+                           std::to_string(w) + "x" + std::to_string(h) + " " + std::string(ToString(k)));
+        ExpectBitEqual(GenerateConeMap(QuantizeToUnorm8(hf), ConeKind::Cone),
+                       GenerateConeMapBruteForce(QuantizeToUnorm8(hf), ConeKind::Cone), "8-bit levels");
+    }
+}
+
+TEST(ConeMap, RelaxedFastEqualsListingBruteForce) {
+    ConeMapParams p;
+    p.searchSteps = 32;
+    for (const HeightField& hf : {MakeBuiltinMap("shapes", 32, 32), RandomField(32, 32, 5, true),
+                                  QuantizeToUnorm8(MakeBuiltinMap("bumps", 24, 24))})
+        ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed, p),
+                       GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p), hf.name + " relaxed");
+    p.searchSteps = 128;
+    const HeightField hf = MakeBuiltinMap("steps", 32, 32);
+    ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed, p),
+                   GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p), "steps relaxed 128");
+}
+
+/// Exact real-number check: no texel above the apex lies strictly inside the stored cone.
+void ExpectConservative(const HeightField& hf, const ConeMap& m) {
+    const int W = hf.width, H = hf.height;
+    for (int j = 0; j < H; ++j)
+        for (int i = 0; i < W; ++i) {
+            const long double r = m.At(i, j);
+            for (int y = 0; y < H; ++y)
+                for (int x = 0; x < W; ++x) {
+                    const float db = hf.At(x, y), dt = hf.At(i, j);
+                    if (!(db < dt)) continue;
+                    const int dx = std::min(std::abs(x - i), W - std::abs(x - i));
+                    const int dy = std::min(std::abs(y - j), H - std::abs(y - j));
+                    const long double dist = std::sqrt((long double)(dx) * dx / ((long double)W * W) +
+                                                       (long double)(dy) * dy / ((long double)H * H));
+                    ASSERT_LE(r * ((long double)dt - db), dist)
+                        << "texel " << i << "," << j << " blocker " << x << "," << y << " r " << double(r) << " dt " << dt << " db " << db;
+                }
+        }
+}
+
+TEST(ConeMap, ConservativeAfterEncoding) {
+    const HeightField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 32, 32));
+    const ConeMap exact = GenerateConeMap(hf, ConeKind::Cone);
+    ExpectConservative(hf, exact);
+    for (ConeEncoding e : {ConeEncoding::U8, ConeEncoding::U8Sqrt, ConeEncoding::U16})
+        ExpectConservative(hf, QuantizeConeMap(exact, e));
+    const HeightField rnd = RandomField(24, 24, 2, false);
+    ExpectConservative(rnd, GenerateConeMap(rnd, ConeKind::Cone));
+}
+
+TEST(ConeMap, EncodingNeverWidens) {
+    for (uint64_t s = 0; s < 20000; ++s) {
+        const float r = float(Mix64(s) >> 40) * (1.3f / 16777216.0f);
+        for (ConeEncoding e : {ConeEncoding::U8, ConeEncoding::U8Sqrt, ConeEncoding::U16}) {
+            const uint16_t c = EncodeRatio(r, e);
+            ASSERT_LE(DecodeRatio(c, e), r) << r << " " << ToString(e);
+            if (r <= 1.0f && c < (e == ConeEncoding::U16 ? 65535 : 255)) {
+                ASSERT_GT(DecodeRatio(uint16_t(c + 1), e), r) << "not the nearest code below";
+            }
+        }
+    }
+}
+
+TEST(ConeMap, BilinearSafetyPassStaysConservative) {
+    const HeightField hf = MakeBuiltinMap("shapes", 64, 64);
+    const ConeMap exact = GenerateConeMap(hf, ConeKind::Cone);
+    const ConeMap safe = QuantizeConeMap(BilinearSafetyPass(exact), ConeEncoding::U8);
+    HeightField tex;  // the map as a texture for the project's bilinear sampler
+    tex.width = safe.width;
+    tex.height = safe.height;
+    tex.depth = safe.values;
+    for (uint64_t s = 0; s < 20000; ++s) {
+        const float u = float(Mix64(2 * s) >> 40) / 16777216.0f;
+        const float v = float(Mix64(2 * s + 1) >> 40) / 16777216.0f;
+        // Footprint texels and their exact ratios.
+        const float x = u * 64.0f - 0.5f, y = v * 64.0f - 0.5f;
+        const int i0 = int(std::floor(x)), j0 = int(std::floor(y));
+        float lo = kConeRatioCap;
+        float hiSafe = 0;
+        for (int d = 0; d < 4; ++d) {
+            const int i = (i0 + (d & 1) + 64) % 64, j = (j0 + (d >> 1) + 64) % 64;
+            lo = std::min(lo, exact.At(i, j));
+            hiSafe = std::max(hiSafe, safe.At(i, j));
+        }
+        // Any weighted mean of the four safe values is <= their max <= the smallest exact one.
+        ASSERT_LE(hiSafe, lo) << u << "," << v;
+    }
+}
+
+TEST(ConeMap, AdaptiveNeverWider) {
+    for (const HeightField& hf : {MakeBuiltinMap("shapes", 64, 64), MakeBuiltinMap("bumps", 64, 64),
+                                  RandomField(64, 64, 4, true), RandomField(48, 40, 4, false)})
+        for (ConeKind k : {ConeKind::Cone, ConeKind::Quad, ConeKind::Acm4, ConeKind::Acm8}) {
+            const ConeMap exact = GenerateConeMap(hf, k);
+            for (float th : {0.0f, 0.05f, 1.0f})
+                for (int levels : {1, 3}) {
+                    AdaptiveStats st;
+                    const ConeMap a = GenerateAdaptiveSectorMap(hf, k, th, levels, &st);
+                    for (size_t t = 0; t < a.values.size(); ++t) {
+                        ASSERT_LE(a.values[t], exact.values[t])
+                            << hf.name << " " << ToString(k) << " th " << th << " at " << t;
+                    }
+                    if (th == 0.0f) {
+                        EXPECT_GT(st.nSearched, 0);
+                    }
+                }
+        }
+}
+
+TEST(ConeMap, AdaptiveWithZeroLevelsIsExact) {
+    const HeightField hf = MakeBuiltinMap("shapes", 32, 32);
+    ExpectBitEqual(GenerateAdaptiveSectorMap(hf, ConeKind::Acm4, 0.5f, 0),
+                   GenerateConeMap(hf, ConeKind::Acm4), "levels 0");
+}
+
+TEST(ConeMap, SectorsAreAtLeastTheConservativeRatio) {
+    const HeightField hf = MakeBuiltinMap("shapes", 32, 32);
+    const ConeMap c = GenerateConeMap(hf, ConeKind::Cone);
+    for (ConeKind k : {ConeKind::Quad, ConeKind::Acm4, ConeKind::Acm8, ConeKind::RelaxedExact}) {
+        const ConeMap s = GenerateConeMap(hf, k);
+        for (int t = 0; t < 32 * 32; ++t) {
+            float mn = kConeRatioCap;
+            for (int ch = 0; ch < s.channels; ++ch) mn = std::min(mn, s.values[size_t(t * s.channels + ch)]);
+            if (k != ConeKind::RelaxedExact) {
+                ASSERT_EQ(mn, c.values[size_t(t)]) << ToString(k);  // min over sectors = cone
+            }
+            if (k == ConeKind::RelaxedExact) {
+                ASSERT_GE(s.values[size_t(t)], c.values[size_t(t)]);
+            }
+        }
+    }
+}
+
+TEST(ConeMap, DeterministicForAnyThreadCount) {
+    const HeightField hf = QuantizeToUnorm8(MakeBuiltinMap("noise", 96, 96));
+    ConeMap one, two;
+    {
+        tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+        one = GenerateConeMap(hf, ConeKind::Cone);
+    }
+    {
+        tbb::global_control c(tbb::global_control::max_allowed_parallelism, 4);
+        two = GenerateConeMap(hf, ConeKind::Cone);
+    }
+    ExpectBitEqual(one, two, "threads");
+}
+
+TEST(ConeMap, MipPyramidsReduceWrapAwareForOddSizes) {
+    std::vector<float> v = {1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15};  // 5 x 3
+    const auto mn = BuildMipPyramid(v, 5, 3, 1, MipReduce::Min);
+    const auto mx = BuildMipPyramid(v, 5, 3, 1, MipReduce::Max);
+    ASSERT_EQ(mn.size(), 4u);  // 5x3, 3x2, 2x1, 1x1
+    EXPECT_EQ(mn[1].width, 3);
+    EXPECT_EQ(mn[1].height, 2);
+    EXPECT_EQ(mn[1].At(2, 0), 1.0f);   // covers columns 4 and 0 (wrap)
+    EXPECT_EQ(mx[1].At(2, 1), 15.0f);  // covers rows 2 and 0 (wrap)
+    EXPECT_EQ(mn.back().At(0, 0), 1.0f);
+    EXPECT_EQ(mx.back().At(0, 0), 15.0f);
+}
+
+TEST(ConeMap, CacheDetectsCorruptAndStaleEntries) {
+    const auto dir = std::filesystem::temp_directory_path() / ("rs_cone_cache_" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);
+    MapCache cache(dir.string());
+    const HeightField hf = MakeBuiltinMap("shapes", 16, 16);
+    int made = 0;
+    auto make = [&] {
+        ++made;
+        return GenerateConeMap(hf, ConeKind::Cone);
+    };
+    bool hit = true;
+    const ConeMap a = cache.GetOrCreate(hf, ConeKind::Cone, {}, make, &hit);
+    EXPECT_FALSE(hit);
+    const ConeMap b = cache.GetOrCreate(hf, ConeKind::Cone, {}, make, &hit);
+    EXPECT_TRUE(hit);
+    ExpectBitEqual(a, b, "cache round trip");
+    // Corrupt one payload byte: detected, regenerated.
+    const std::string path = cache.PathFor(ConeMapCacheKey(hf, ConeKind::Cone, {}));
+    {
+        std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+        f.seekp(60);
+        f.put('\x7f');
+    }
+    cache.GetOrCreate(hf, ConeKind::Cone, {}, make, &hit);
+    EXPECT_FALSE(hit);
+    // Truncated file.
+    std::filesystem::resize_file(path, 20);
+    cache.GetOrCreate(hf, ConeKind::Cone, {}, make, &hit);
+    EXPECT_FALSE(hit);
+    // Other pixels or parameters: other key.
+    HeightField hf2 = hf;
+    hf2.depth[5] = 0.123f;
+    EXPECT_NE(ConeMapCacheKey(hf, ConeKind::Cone, {}), ConeMapCacheKey(hf2, ConeKind::Cone, {}));
+    ConeMapParams p;
+    p.searchSteps = 64;
+    EXPECT_NE(ConeMapCacheKey(hf, ConeKind::Relaxed, {}), ConeMapCacheKey(hf, ConeKind::Relaxed, p));
+    EXPECT_EQ(made, 3);
+    std::filesystem::remove_all(dir);
+}
+
+TEST(ConeMap, BadInputGivesOneClearError) {
+    HeightField hf = MakeBuiltinMap("flat", 8, 8);
+    hf.depth[3] = std::nanf("");
+    EXPECT_THROW(GenerateConeMap(hf, ConeKind::Cone), Error);
+    HeightField empty;
+    empty.name = "empty";
+    try {
+        GenerateConeMap(empty, ConeKind::Cone);
+        FAIL() << "no error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("zero size"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(ParseConeKind("cones").has_value());
+    EXPECT_NE(ConeKindList().find("\"relaxed-exact\""), std::string::npos);
+    ConeMapParams p;
+    p.searchSteps = 0;
+    EXPECT_THROW(GenerateConeMap(MakeBuiltinMap("flat", 8, 8), ConeKind::Relaxed, p), Error);
+}
+
+TEST(ConeMap, WriteIsAtomicAndRejectsBadExtension) {
+    const auto dir = std::filesystem::temp_directory_path() / ("rs_cone_out_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    const ConeMap m = GenerateConeMap(MakeBuiltinMap("shapes", 16, 16), ConeKind::Acm8);
+    EXPECT_THROW(WriteConeMap((dir / "a.jpg").string(), m, ConeEncoding::U8), Error);
+    WriteConeMap((dir / "a.exr").string(), m, ConeEncoding::Float);
+    WriteConeMap((dir / "a.png").string(), m, ConeEncoding::U8);
+    size_t n = 0;
+    for (auto& e : std::filesystem::directory_iterator(dir)) {
+        (void)e;
+        ++n;
+    }
+    EXPECT_EQ(n, 2u);  // no temporaries left, nothing for the bad extension
+    std::filesystem::remove_all(dir);
+}
+
+TEST(ConeMap, ExternalGpuGemsMapLoadsAndChecksSize) {
+#ifndef RS_SHARED_DATA
+    GTEST_SKIP() << "RS_SHARED_DATA not defined";
+#else
+    const std::string path = std::string(RS_SHARED_DATA) + "/gpugems3-ch18/tile1_cone.tga";
+    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " absent";
+    const ConeMap ext = LoadExternalConeMap(path, ConeKind::Cone, 2, 256, 256);
+    EXPECT_EQ(ext.width, 256);
+    const ConeMapStats s = ComputeConeMapStats(ext);
+    EXPECT_GT(s.meanRatio, 0.0);
+    EXPECT_LE(s.maxRatio, 1.0);
+    EXPECT_THROW(LoadExternalConeMap(path, ConeKind::Cone, 2, 128, 128), Error);
+#endif
+}
+
+}  // namespace
+}  // namespace reliefsim
