@@ -2,6 +2,7 @@
 // (Felzenszwalb & Huttenlocher lower envelope): q(t) = min over levels v < d_t of
 // S_v(t) / (d_t - v)^2, S_v the exact squared distance to the nearest texel with depth <= v.
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include <tbb/blocked_range.h>
@@ -62,42 +63,61 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
             const int ext = g.halfX;
             const int n = W + 2 * ext;
             std::vector<int> vpos(size_t(n) + 1);
-            std::vector<double> z(size_t(n) + 2);
+            // Breakpoints as exact fractions zNum / zDen (zDen > 0): every product below stays
+            // under 2^53, so the envelope is built without rounding (no ties misresolved).
+            std::vector<double> zNum(size_t(n) + 2), zDen(size_t(n) + 2);
             std::vector<int64_t> fv(size_t(n) + 1);
+            const double wx = double(g.wx);
             for (int j = r.begin(); j < r.end(); ++j) {
                 const size_t row = size_t(j) * size_t(W);
                 bool any = false;
                 for (int i = 0; i < W; ++i) any |= lev[row + size_t(i)] > l;
                 if (!any) continue;
+                // When every f is finite, S(i) <= f(i) <= fMax, so parabolas further than
+                // sqrt(fMax / wx) from [0, W) never reach the envelope: shorten the wrap.
+                int32_t vMax = 0;
+                for (int i = 0; i < W; ++i) vMax = std::max(vMax, vdist[row + size_t(i)]);
+                int e0 = ext;
+                if (vMax < kInfDist) {
+                    const double reach = std::sqrt(double(vMax) * double(vMax) * double(g.wy) / wx);
+                    e0 = std::min(ext, int(std::ceil(reach)) + 1);
+                }
                 int k = -1;
-                for (int p = -ext; p < W + ext; ++p) {
+                for (int p = -e0; p < W + e0; ++p) {
                     const int32_t vd = vdist[row + size_t(Wrap(p, W))];
                     if (vd >= kInfDist) continue;
                     const int64_t f = int64_t(vd) * vd * g.wy;
-                    const double fp = double(f) + double(g.wx) * double(p) * double(p);
-                    double s = 0;
+                    const double fp = double(f) + wx * double(p) * double(p);
+                    double num = 0, den = 1;
                     while (k >= 0) {
                         const int vq = vpos[size_t(k)];
-                        const double fq = double(fv[size_t(k)]) + double(g.wx) * double(vq) * double(vq);
-                        s = (fp - fq) / (2.0 * double(g.wx) * double(p - vq));
-                        if (s <= z[size_t(k)]) --k;
+                        const double fq = double(fv[size_t(k)]) + wx * double(vq) * double(vq);
+                        num = fp - fq;
+                        den = 2.0 * wx * double(p - vq);
+                        // pop while s <= z[k] (z[0] = -inf)
+                        if (k > 0 && num * zDen[size_t(k)] <= zNum[size_t(k)] * den) --k;
                         else break;
                     }
                     ++k;
                     vpos[size_t(k)] = p;
                     fv[size_t(k)] = f;
-                    z[size_t(k)] = k == 0 ? -1e300 : s;
-                    z[size_t(k) + 1] = 1e300;
+                    zNum[size_t(k)] = num;
+                    zDen[size_t(k)] = den;
                 }
                 if (k < 0) continue;
+                const int last = k;
                 int e = 0;
                 for (int i = 0; i < W; ++i) {
-                    while (z[size_t(e) + 1] < double(i)) ++e;
+                    // advance while z[e+1] < i
+                    while (e < last && zNum[size_t(e) + 1] < double(i) * zDen[size_t(e) + 1]) ++e;
                     const size_t t = row + size_t(i);
                     if (lev[t] <= l) continue;
                     const int64_t dx = i - vpos[size_t(e)];
                     const int64_t S = dx * dx * g.wx + fv[size_t(e)];
-                    if (S >= kInfS) continue;
+                    // Cheap filter with a safe margin; the exact candidate is computed only
+                    // when it can win, so the minimum is the brute force's.
+                    const double dd = double(hf.depth[t]) - double(v);
+                    if (!(double(S) < q[t] * (dd * dd) * (1.0 + 1e-12))) continue;
                     const double c = CandidateQ(S, hf.depth[t], v);
                     if (c < q[t]) q[t] = c;
                 }
