@@ -5,6 +5,7 @@
 #include <fstream>
 
 #include "app/pipeline.h"
+#include "app/trace.h"
 #include "core/error.h"
 #include "texture/procedural.h"
 
@@ -127,4 +128,27 @@ TEST(Render, InvalidSettingsThrowBeforeRendering) {
     EXPECT_THROW(Render(f, s), Error);
     s = Small("nope");
     EXPECT_THROW(Render(f, s), Error);
+}
+
+TEST(Trace, MatchesTheFrameRecordAtEveryProbedPixel) {
+    HeightField f = MakeBuiltinMap("builtin:shapes:128");
+    for (const char* method : {"relief", "secant", "interval"}) {
+        RenderSettings s = Small(method);
+        RenderOutput out = Render(f, s);
+        const FrameRecord& r = out.record;
+        int checked = 0;
+        for (int y = 1; y < s.height; y += 13)
+            for (int x = 2; x < s.width; x += 17) {
+                size_t i = r.Index(x, y);
+                if (!r.Covered(i)) continue;
+                PixelTrace t = TracePixel(f, s, x, y);
+                EXPECT_EQ(t.result.depthHit, r.hitDepth[i]);
+                EXPECT_EQ(t.result.uvHit.x, r.hitU[i]);
+                EXPECT_EQ(t.counts.nFetches, r.nFetches[i]);
+                EXPECT_EQ(t.fetches.size(), size_t(r.nFetches[i]));
+                ++checked;
+            }
+        EXPECT_GT(checked, 20);
+    }
+    EXPECT_THROW(TracePixel(f, Small("relief"), 150, 0), Error);
 }

@@ -1,0 +1,33 @@
+// Step-by-step trace of one pixel's kernel: every fetch with its uv, ray depth and value.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "app/pipeline.h"
+
+namespace reliefsim {
+
+struct TraceFetch {
+    glm::vec2 uv;   ///< where the sampler was called
+    float t;        ///< the ray depth at that uv (recovered from the ray), NaN if ambiguous
+    float depth;    ///< what the sampler returned
+};
+
+struct PixelTrace {
+    int x = 0, y = 0;
+    MarchInput input;
+    MarchResult result;
+    FetchCounts counts;
+    std::vector<TraceFetch> fetches;
+};
+
+/// Runs the settings' kernel for pixel (x, y) alone, recording every fetch. The kernel, sampler
+/// and inputs are those of Render(), so the result equals the frame's record at that pixel.
+/// Throws Error for a pixel outside the image.
+PixelTrace TracePixel(const HeightField& field, const RenderSettings& settings, int x, int y);
+
+/// Human-readable trace: the ray, one line per fetch, and the result.
+std::string FormatTrace(const PixelTrace& trace);
+
+}  // namespace reliefsim
