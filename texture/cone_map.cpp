@@ -342,4 +342,40 @@ std::string ConeMapStatsJson(const ConeMap& m, const ConeMapStats& s, ConeEncodi
     return j.dump(2);
 }
 
+HeightField MakeSinusoidMap(int width, int height, float t) {
+    HeightField hf;
+    hf.width = width;
+    hf.height = height;
+    hf.name = "sinusoids";
+    hf.depth.resize(size_t(width) * size_t(height));
+    constexpr double kTwoPi = 6.283185307179586;
+    // (cycles in u, cycles in v, speed in cycles/s, amplitude): integer cycles keep it periodic.
+    static constexpr double kWaves[4][4] = {
+        {2, 1, 0.5, 0.20}, {-1, 3, 0.8, 0.12}, {4, -2, 1.1, 0.07}, {1, 5, 0.3, 0.05}};
+    // sin(a + b) = sin a cos b + cos a sin b: per-column and per-row tables, no sin per texel.
+    std::vector<double> su(size_t(width) * 4), cu(size_t(width) * 4), sv(size_t(height) * 4),
+        cv(size_t(height) * 4);
+    for (int w = 0; w < 4; ++w) {
+        for (int i = 0; i < width; ++i) {
+            const double a = kTwoPi * kWaves[w][0] * ((i + 0.5) / width);
+            su[size_t(i) * 4 + size_t(w)] = std::sin(a);
+            cu[size_t(i) * 4 + size_t(w)] = std::cos(a);
+        }
+        for (int j = 0; j < height; ++j) {
+            const double b = kTwoPi * (kWaves[w][1] * ((j + 0.5) / height) - kWaves[w][2] * double(t));
+            sv[size_t(j) * 4 + size_t(w)] = kWaves[w][3] * std::sin(b);
+            cv[size_t(j) * 4 + size_t(w)] = kWaves[w][3] * std::cos(b);
+        }
+    }
+    for (int j = 0; j < height; ++j)
+        for (int i = 0; i < width; ++i) {
+            double h = 0;
+            for (size_t w = 0; w < 4; ++w)
+                h += su[size_t(i) * 4 + w] * cv[size_t(j) * 4 + w] +
+                     cu[size_t(i) * 4 + w] * sv[size_t(j) * 4 + w];
+            hf.depth[size_t(j) * size_t(width) + size_t(i)] = float(0.5 + h);
+        }
+    return hf;
+}
+
 }  // namespace reliefsim

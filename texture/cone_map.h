@@ -140,4 +140,9 @@ void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc);
 ConeMap LoadExternalConeMap(const std::string& path, ConeKind kind, int channel,
                             int expectWidth = 0, int expectHeight = 0);
 
+/// The dynamic-map demo of 000 (water): a sum of four travelling sinusoids at time t
+/// (seconds), depth in [0.05, 0.95], periodic in u and v. Regenerated every frame by
+/// `reliefsim maps --animate N`.
+HeightField MakeSinusoidMap(int width, int height, float t);
+
 }  // namespace reliefsim

@@ -194,9 +194,19 @@ ConeMap GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float th
     m.height = H;
     m.channels = nS;
     m.values.assign(size_t(W) * size_t(H) * size_t(nS), 0.0f);
-    const TiledOffsets to = MakeTiledOffsets(g, kind);
-    const std::vector<float> win = WindowMin(hf);
     const Level* parent = nL >= 1 ? &L[1] : nullptr;
+    // Offsets and window minima only when some texel is searched (dynamic maps often copy all).
+    bool anySearch = !parent;
+    for (int j = 0; j < H && !anySearch; ++j)
+        for (int i = 0; i < W; ++i) {
+            const size_t pb = size_t(j / 2) * size_t(parent->nx) + size_t(i / 2);
+            if (!(std::abs(hf.At(i, j) - parent->dmin[pb]) <= threshold)) {
+                anySearch = true;
+                break;
+            }
+        }
+    const TiledOffsets to = anySearch ? MakeTiledOffsets(g, kind) : TiledOffsets{};
+    const std::vector<float> win = anySearch ? WindowMin(hf) : std::vector<float>{};
     tbb::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& r) {
         for (int j = r.begin(); j < r.end(); ++j)
             for (int i = 0; i < W; ++i) {

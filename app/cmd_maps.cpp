@@ -1,0 +1,218 @@
+// `reliefsim maps`: generate (or load) a derived map, print and write its statistics (#3).
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <unistd.h>
+
+#include "app/commands.h"
+#include "core/error.h"
+#include "texture/cone_map.h"
+#include "texture/map_cache.h"
+#include "texture/mip_pyramid.h"
+
+namespace reliefsim {
+
+namespace {
+
+struct MapsOptions {
+    MapOptions map;
+    std::string kind = "cone";
+    std::string encoding = "float";
+    std::string out;
+    std::string cacheDir;
+    std::string external;
+    std::string externalChannel = "B";
+    bool adaptive = false;
+    bool safety = false;
+    bool relaxed = false;
+    float threshold = 0.25f;
+    int levels = 3;
+    int searchSteps = 128;
+    int stackedCount = 4;
+    int animate = 0;
+    int bins = 32;
+};
+
+void Status(const char* msg) {
+    if (::isatty(2)) std::fprintf(stderr, "\r[maps] %-60s", msg);
+}
+void StatusDone() {
+    if (::isatty(2)) std::fprintf(stderr, "\r[maps] %-60s\n", "done");
+}
+
+void WriteTextAtomic(const std::string& path, const std::string& text) {
+    const std::string tmp = path + ".tmp" + std::to_string(::getpid());
+    {
+        std::ofstream f(tmp);
+        if (!f) throw Error("\"" + path + "\": cannot write");
+        f << text << "\n";
+        if (!f) throw Error("\"" + path + "\": write failed");
+    }
+    std::filesystem::rename(tmp, path);
+}
+
+std::string StatsPath(const std::string& out) {
+    std::filesystem::path p(out);
+    return (p.parent_path() / (p.stem().string() + ".stats.json")).string();
+}
+
+void PrintStats(const ConeMap& m, const ConeMapStats& s) {
+    std::printf("%s %dx%d x%d: min %.6g  mean %.6g  max %.6g  (%lld values, %lld unbounded)\n",
+                std::string(ToString(m.kind)).c_str(), m.width, m.height, m.channels, s.minRatio,
+                s.meanRatio, s.maxRatio, static_cast<long long>(s.nValues),
+                static_cast<long long>(s.nUnbounded));
+    const double nb = double(s.histogram.size());
+    int64_t peak = 1;
+    for (int64_t c : s.histogram) peak = std::max(peak, c);
+    for (size_t b = 0; b < s.histogram.size(); ++b) {
+        const int bar = int(40.0 * double(s.histogram[b]) / double(peak));
+        std::printf("  [%.3f,%.3f%c %9lld %s\n", double(b) / nb, double(b + 1) / nb,
+                    b + 1 == s.histogram.size() ? ']' : ')',
+                    static_cast<long long>(s.histogram[b]), std::string(size_t(bar), '#').c_str());
+    }
+}
+
+void Run(const MapsOptions& o) {
+    // Validate everything before any work or output.
+    const auto kind = ParseConeKind(o.kind);
+    if (!kind) throw Error("--kind \"" + o.kind + "\": unknown; must be one of " + ConeKindList());
+    const auto enc = ParseConeEncoding(o.encoding);
+    if (!enc)
+        throw Error("--encoding \"" + o.encoding + "\": unknown; must be one of " +
+                    ConeEncodingList());
+    if (!o.out.empty()) {
+        const std::string ext = std::filesystem::path(o.out).extension().string();
+        if (ext != ".exr" && ext != ".png")
+            throw Error("--out \"" + o.out + "\": unsupported extension; expected .exr or .png");
+    }
+    if (o.animate < 0 || o.animate > 100000)
+        throw Error("--animate " + std::to_string(o.animate) + ": expected 0..100000 frames");
+    if (o.bins < 1 || o.bins > 4096) throw Error("--bins: expected 1..4096");
+    int extChannel = 2;
+    if (o.externalChannel == "R") extChannel = 0;
+    else if (o.externalChannel == "G") extChannel = 1;
+    else if (o.externalChannel == "B") extChannel = 2;
+    else if (o.externalChannel == "A") extChannel = 3;
+    else if (o.externalChannel == "all") extChannel = -1;
+    else throw Error("--external-channel \"" + o.externalChannel + "\": must be R, G, B, A or all");
+    ConeMapParams p;
+    p.searchSteps = o.searchSteps;
+    p.stackedCount = o.stackedCount;
+    p.relaxedNormal = o.relaxed;
+    p.adaptive = o.adaptive;
+    p.threshold = o.threshold;
+    p.adaptiveLevels = o.levels;
+    ValidateConeMapParams(p);
+
+    if (o.animate > 0) {
+        const ConeKind k = (*kind == ConeKind::Cone || *kind == ConeKind::Quad ||
+                            *kind == ConeKind::Acm8)
+                               ? *kind
+                               : ConeKind::Acm4;
+        const HeightField first = LoadMapFromOptions(o.map);
+        const int W = first.width, H = first.height;
+        double sum = 0, worst = 0;
+        for (int f = 0; f < o.animate; ++f) {
+            const auto t0 = std::chrono::steady_clock::now();
+            const HeightField hf = MakeSinusoidMap(W, H, float(f) / 30.0f);
+            const ConeMap m = GenerateAdaptiveSectorMap(hf, k, o.threshold, o.levels);
+            const double ms =
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+            sum += ms;
+            worst = std::max(worst, ms);
+            std::printf("frame %d: %.3f ms (%s %dx%d, regenerate + adaptive)\n", f, ms,
+                        std::string(ToString(k)).c_str(), m.width, m.height);
+        }
+        std::printf("animate: %d frames, mean %.3f ms, max %.3f ms per frame\n", o.animate,
+                    sum / o.animate, worst);
+        return;
+    }
+
+    const HeightField hf = LoadMapFromOptions(o.map);
+    if (*kind == ConeKind::MinMip || *kind == ConeKind::MaxMip) {
+        // maxmip: max height = min depth; minmip: min height = max depth.
+        const auto levels = BuildMipPyramid(hf.depth, hf.width, hf.height, 1,
+                                            *kind == ConeKind::MaxMip ? MipReduce::Min : MipReduce::Max);
+        for (size_t l = 0; l < levels.size(); ++l) {
+            std::printf("level %zu: %dx%d\n", l, levels[l].width, levels[l].height);
+            if (o.out.empty()) continue;
+            std::filesystem::path op(o.out);
+            const std::string path = (op.parent_path() / (op.stem().string() + "_L" +
+                                                          std::to_string(l) + op.extension().string()))
+                                         .string();
+            ConeMap m;
+            m.kind = *kind;
+            m.width = levels[l].width;
+            m.height = levels[l].height;
+            m.values = levels[l].values;
+            WriteConeMap(path, m, ConeEncoding::Float);
+        }
+        return;
+    }
+
+    ConeMap m;
+    Status("generating");
+    if (!o.external.empty()) {
+        m = LoadExternalConeMap(o.external, *kind, extChannel, hf.width, hf.height);
+    } else if (!o.cacheDir.empty()) {
+        bool hit = false;
+        m = MapCache(o.cacheDir).GetOrCreate(hf, *kind, p, [&] { return GenerateConeMap(hf, *kind, p); },
+                                             &hit);
+        std::printf("cache: %s\n", hit ? "hit" : "miss (generated and stored)");
+    } else {
+        m = GenerateConeMap(hf, *kind, p);
+    }
+    if (o.safety) m = BilinearSafetyPass(m);
+    const ConeMap stored = QuantizeConeMap(m, *enc);
+    StatusDone();
+    const ConeMapStats s = ComputeConeMapStats(stored, o.bins);
+    PrintStats(stored, s);
+    if (!o.out.empty()) {
+        WriteConeMap(o.out, m, *enc);
+        WriteTextAtomic(StatsPath(o.out), ConeMapStatsJson(stored, s, *enc));
+        std::printf("wrote %s and %s\n", o.out.c_str(), StatsPath(o.out).c_str());
+    }
+}
+
+}  // namespace
+
+void RegisterMapsCommand(CLI::App& root) {
+    auto o = std::make_shared<MapsOptions>();
+    auto* cmd = root.add_subcommand(
+        "maps", "generate a derived map (cone family, mip pyramids), print and write statistics");
+    AddMapOptions(cmd, o->map);
+    cmd->add_option("--kind", o->kind,
+                    "cone|relaxed|relaxed-exact|quad|acm4|acm8|cone-normal|stacked|minmip|maxmip")
+        ->capture_default_str();
+    cmd->add_option("--encoding", o->encoding,
+                    "float|u8|u8sqrt|u16 (quantisation rounds toward smaller ratios)")
+        ->capture_default_str();
+    cmd->add_flag("--adaptive", o->adaptive,
+                  "adaptive hierarchical preprocessing (000 Algorithm 1; cone, quad, acm4, acm8)");
+    cmd->add_option("--threshold", o->threshold,
+                    "adaptive: copy the parent's ratio when depths differ by <= this")
+        ->capture_default_str();
+    cmd->add_option("--levels", o->levels, "adaptive: hierarchy levels above the finest")
+        ->capture_default_str();
+    cmd->add_option("--search-steps", o->searchSteps, "relaxed: Listing 18-2 search steps")
+        ->capture_default_str();
+    cmd->add_option("--stacked-count", o->stackedCount, "stacked: number of cones")
+        ->capture_default_str();
+    cmd->add_flag("--relaxed", o->relaxed, "cone-normal: from the relaxed (Listing) ratio");
+    cmd->add_flag("--safety", o->safety, "3x3-minimum bilinear safety pass (Ban et al.)");
+    cmd->add_option("--out", o->out, "output: .exr (float, one channel per ratio) or .png (8-bit)");
+    cmd->add_option("--cache-dir", o->cacheDir, "disk cache of generated maps (content-hash keys)");
+    cmd->add_option("--external", o->external,
+                    "use a cone map made elsewhere (e.g. GPU Gems 3 *_cone.tga) instead of generating");
+    cmd->add_option("--external-channel", o->externalChannel, "R|G|B|A|all (GPU Gems 3: B)")
+        ->capture_default_str();
+    cmd->add_option("--animate", o->animate,
+                    "N frames of the dynamic sinusoid map at the --map size, regenerated and "
+                    "preprocessed with adaptive ACM each frame; prints per-frame times");
+    cmd->add_option("--bins", o->bins, "histogram bins over [0,1]")->capture_default_str();
+    cmd->callback([o] { Run(*o); });
+}
+
+}  // namespace reliefsim
