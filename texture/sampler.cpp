@@ -13,6 +13,22 @@ std::string_view ToString(Filter f) {
 }
 std::string_view ToString(WrapMode w) { return w == WrapMode::Clamp ? "clamp" : "repeat"; }
 
+std::string_view ToString(Precision p) {
+    switch (p) {
+        case Precision::Float: return "float";
+        case Precision::Llvmpipe8: return "llvmpipe8";
+        case Precision::Gpu8: return "gpu8";
+    }
+    return "?";
+}
+
+std::optional<Precision> ParsePrecision(std::string_view s) {
+    if (s == "float") return Precision::Float;
+    if (s == "llvmpipe8") return Precision::Llvmpipe8;
+    if (s == "gpu8") return Precision::Gpu8;
+    return std::nullopt;
+}
+
 std::optional<Filter> ParseFilter(std::string_view s) {
     if (s == "nearest") return Filter::Nearest;
     if (s == "bilinear") return Filter::Bilinear;

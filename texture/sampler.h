@@ -19,16 +19,29 @@ enum class Filter {
     Min4,      ///< minimum over the bilinear footprint (GL_MIN reduction): conservative cone maps
 };
 enum class WrapMode { Repeat, Clamp };
+/// The arithmetic of bilinear filtering (the Bilinear filter; Nearest and Min4 are exact
+/// selections and ignore it).
+enum class Precision {
+    Float,      ///< float weights, fmaf lerps: llvmpipe's SoA path for R32F (§2.1)
+    Llvmpipe8,  ///< llvmpipe's AoS 8.8 fixed-point path for 8-bit unorm textures (§2.2):
+                ///< 8-bit weights and 8-bit intermediate results; needs HeightField::depth8
+    Gpu8,       ///< GPU-spec: float texels, weights rounded to 8 subtexel bits (1/256),
+                ///< float fmaf lerps; for artifact studies (D3D-style 8-bit subtexel precision)
+};
 
 std::string_view ToString(Filter f);
 std::string_view ToString(WrapMode w);
+std::string_view ToString(Precision p);
 std::optional<Filter> ParseFilter(std::string_view s);
 std::optional<WrapMode> ParseWrapMode(std::string_view s);
+std::optional<Precision> ParsePrecision(std::string_view s);  ///< float|llvmpipe8|gpu8
 
-/// How a texture is sampled. Defaults: bilinear, repeat (DESIGN.md conventions).
+/// How a texture is sampled. Defaults: bilinear, repeat, float arithmetic (DESIGN.md
+/// conventions).
 struct SamplerState {
     Filter filter = Filter::Bilinear;
     WrapMode wrap = WrapMode::Repeat;
+    Precision precision = Precision::Float;
 };
 
 /// Per-lane counters. A fetch is one sampler call; a texel read one texel loaded from memory.
@@ -85,6 +98,52 @@ inline LinearAxis WrapLinear(float u, int n, WrapMode wrap) {
     return a;
 }
 
+/// Float to int as x86 cvtps2dq does it under the default MXCSR rounding: round half to
+/// even, INT_MIN when out of range or NaN.
+inline int RoundToInt(float f) {
+    float r = std::nearbyint(f);
+    return (r >= -2147483648.0f && r < 2147483648.0f) ? int(r) : INT_MIN;
+}
+
+/// One axis of llvmpipe's AoS 8-bit footprint (research/llvmpipe.md §2.2): the coordinate
+/// in 8.8 fixed point, s = round(u * W * 256) - 128, i0 = s >> 8, weight = s & 255.
+struct FixedAxis {
+    int i0, i1;
+    int w;  ///< weight of i1 in 1/256, [0, 255]
+};
+
+inline FixedAxis WrapLinearFixed8(float u, int n, WrapMode wrap) {
+    FixedAxis a;
+    int64_t s;
+    if (wrap == WrapMode::Repeat && !IsPowerOfTwo(n)) {
+        float f = u - std::floor(u);
+        s = int64_t(RoundToInt(f * float(n * 256))) - 128;
+    } else {
+        s = int64_t(RoundToInt(u * float(n * 256))) - 128;
+    }
+    const int64_t i = s >> 8;  // arithmetic shift (C++20)
+    a.w = int(s & 255);
+    if (wrap == WrapMode::Clamp) {
+        auto clampIndex = [n](int64_t k) { return int(k < 0 ? 0 : (k > n - 1 ? n - 1 : k)); };
+        a.i0 = clampIndex(i);
+        a.i1 = clampIndex(i + 1);
+    } else if (IsPowerOfTwo(n)) {
+        a.i0 = int(i & int64_t(n - 1));
+        a.i1 = int((i + 1) & int64_t(n - 1));
+    } else {
+        a.i0 = i < 0 ? n - 1 : int(i);
+        a.i1 = a.i0 == n - 1 ? 0 : a.i0 + 1;
+    }
+    return a;
+}
+
+/// llvmpipe's 8-bit lerp (lp_build_lerp_simple with pmulhrsw): a + floor((w (b - a) + 128)
+/// / 256), an 8-bit result.
+inline int Lerp8(int w, int a, int b) { return (a + ((w * (b - a) * 128 + 16384) >> 15)) & 255; }
+
+/// A float weight rounded to 8 subtexel bits (GPU-spec mode): nearest multiple of 1/256.
+inline float QuantizeWeight8(float w) { return std::nearbyint(w * 256.0f) * (1.0f / 256.0f); }
+
 /// Texel index of a nearest lookup (research/llvmpipe.md §2.3).
 inline int WrapNearest(float u, int n, WrapMode wrap) {
     const float fn = float(n);
@@ -128,16 +187,36 @@ public:
                      detail::WrapNearest(uv.y, field_->height, state_.wrap));
     }
 
-    /// One fetch, 4 texel reads. x lerp then y lerp, each fmaf(w, b - a, a) (llvmpipe §2.1).
+    /// One fetch, 4 texel reads. Float precision: x lerp then y lerp, each fmaf(w, b - a, a)
+    /// (llvmpipe §2.1). Llvmpipe8: the 8.8 fixed-point model of §2.2 on depth8. Gpu8: as
+    /// float with weights rounded to 1/256.
     float SampleBilinear(glm::vec2 uv) {
+        if (state_.precision == Precision::Llvmpipe8) return SampleBilinearFixed8(uv);
         CountFetch();
         detail::LinearAxis s = detail::WrapLinear(uv.x, field_->width, state_.wrap);
         detail::LinearAxis t = detail::WrapLinear(uv.y, field_->height, state_.wrap);
+        if (state_.precision == Precision::Gpu8) {
+            s.w = detail::QuantizeWeight8(s.w);
+            t.w = detail::QuantizeWeight8(t.w);
+        }
         float t00 = Texel(s.i0, t.i0), t10 = Texel(s.i1, t.i0);
         float t01 = Texel(s.i0, t.i1), t11 = Texel(s.i1, t.i1);
         float r0 = std::fma(s.w, t10 - t00, t00);
         float r1 = std::fma(s.w, t11 - t01, t01);
         return std::fma(t.w, r1 - r0, r0);
+    }
+
+    /// One fetch, 4 texel reads of depth8: llvmpipe's AoS fixed-point bilinear (§2.2).
+    /// Requires the field's depth8 (HeightField::depth8); callers validate that it is there.
+    float SampleBilinearFixed8(glm::vec2 uv) {
+        CountFetch();
+        detail::FixedAxis s = detail::WrapLinearFixed8(uv.x, field_->width, state_.wrap);
+        detail::FixedAxis t = detail::WrapLinearFixed8(uv.y, field_->height, state_.wrap);
+        int t00 = Texel8(s.i0, t.i0), t10 = Texel8(s.i1, t.i0);
+        int t01 = Texel8(s.i0, t.i1), t11 = Texel8(s.i1, t.i1);
+        int r0 = detail::Lerp8(s.w, t00, t10);
+        int r1 = detail::Lerp8(s.w, t01, t11);
+        return Unorm8ToFloat(uint8_t(detail::Lerp8(t.w, r0, r1)));
     }
 
     /// One fetch, 4 texel reads: the minimum over the bilinear footprint, ignoring texels whose
@@ -170,6 +249,10 @@ private:
     float Texel(int i, int j) {
         if constexpr (kCount) ++counts_->nTexelReads;
         return field_->depth[size_t(j) * size_t(field_->width) + size_t(i)];
+    }
+    int Texel8(int i, int j) {
+        if constexpr (kCount) ++counts_->nTexelReads;
+        return field_->depth8[size_t(j) * size_t(field_->width) + size_t(i)];
     }
     int WrapIndex(int i, int n) const {
         if (state_.wrap == WrapMode::Clamp) return i < 0 ? 0 : (i >= n ? n - 1 : i);

@@ -1,0 +1,301 @@
+// `reliefsim glcompare`: renders with the C++ frame loop and with the GLSL twins on llvmpipe
+// and compares the per-pixel records bit for bit.
+#include "app/glcompare.h"
+
+#include <cinttypes>
+#include <cstdio>
+#include <cstring>
+#include <iostream>
+#include <sstream>
+
+#include "app/commands.h"
+#include "core/error.h"
+#include "metrics/heatmap.h"
+#include "raster/camera.h"
+#include "raster/rasterizer.h"
+
+namespace reliefsim {
+
+namespace {
+
+Camera SceneCamera(const RenderSettings& s) {
+    return MakeOrbitCamera(s.viewAngle, s.azimuth, s.distance, s.fovY,
+                           float(s.width) / float(s.height));
+}
+
+std::string Hex(float f) {
+    uint32_t b;
+    std::memcpy(&b, &f, sizeof b);
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.9g (0x%08" PRIx32 ")", double(f), b);
+    return buf;
+}
+
+std::string Number(float f) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.9g", double(f));
+    return buf;
+}
+
+/// The C++ kernel's fetches for one pixel: a sampler that logs every call.
+struct TracingSampler {
+    CountingSampler inner;
+    std::vector<glm::vec4> log;  // u, v, depth, (unused)
+    float Sample(glm::vec2 uv) {
+        float h = inner.Sample(uv);
+        log.emplace_back(uv.x, uv.y, h, 0.0f);
+        return h;
+    }
+};
+
+struct GlCompareArgs {
+    RenderOptions options;
+    bool json = false;
+    std::string heatmap = "glcompare_diff.png";
+    std::string tracePixel;
+    int maxListed = 10;
+};
+
+void PrintTrace(const GlCompareArgs& a, const HeightField& field, int x, int y) {
+    const RenderSettings& s = a.options.settings;
+    if (x < 0 || y < 0 || x >= s.width || y >= s.height)
+        throw Error("--trace-pixel " + a.tracePixel + ": outside the " + std::to_string(s.width) +
+                    "x" + std::to_string(s.height) + " frame");
+    const MethodInfo& method = FindMethod(s.method);
+    Kernel kernel = MakeKernel(method, ResolveParams(method, s.set));
+    // C++ path, under the frame loop's FTZ/DAZ.
+    MarchInput in;
+    MarchResult m;
+    FetchCounts counts;
+    std::vector<glm::vec4> cpuLog;
+    {
+        detail::DenormalsAreZeroScope fp;
+        in = PixelToRay(MakeViewUniforms(s), x, y);
+        TracingSampler sampler{CountingSampler(field, s.sampler, &counts), {}};
+        m = std::visit([&](const auto& k) { return k.March(in, sampler); }, kernel);
+        cpuLog = sampler.log;
+    }
+    GlReference gl(s.threads > 0 ? s.threads : -1);
+    GlScene scene = MakeGlScene(s);
+    scene.measureLanes = false;
+    scene.traceX = x;
+    scene.traceY = y;
+    GlFrame g = gl.Render(field, scene);
+    const size_t i = g.record.Index(x, y);
+    std::cout << "trace of pixel " << x << "," << y << " (row 0 at the top), " << s.method
+              << "; " << gl.Renderer() << "\n"
+              << "ray: uvEntry " << Hex(in.uvEntry.x) << ", " << Hex(in.uvEntry.y) << "; dirUv "
+              << Hex(in.dirUv.x) << ", " << Hex(in.dirUv.y) << "\n";
+    const size_t n = std::max(cpuLog.size(), g.trace.size());
+    for (size_t k = 0; k < n; ++k) {
+        std::cout << "fetch " << k << ":\n";
+        if (k < cpuLog.size())
+            std::cout << "  C++  uv " << Hex(cpuLog[k].x) << ", " << Hex(cpuLog[k].y)
+                      << "  depth " << Hex(cpuLog[k].z) << "\n";
+        if (k < g.trace.size())
+            std::cout << "  GL   uv " << Hex(g.trace[k].x) << ", " << Hex(g.trace[k].y)
+                      << "  depth " << Hex(g.trace[k].z) << "  t " << Hex(g.trace[k].w) << "\n";
+        if (k < cpuLog.size() && k < g.trace.size() &&
+            (UlpDistance(cpuLog[k].x, g.trace[k].x) || UlpDistance(cpuLog[k].y, g.trace[k].y) ||
+             UlpDistance(cpuLog[k].z, g.trace[k].z)))
+            std::cout << "  ^ first divergence\n";
+    }
+    std::cout << "result C++: uv " << Hex(m.uvHit.x) << ", " << Hex(m.uvHit.y) << " depth "
+              << Hex(m.depthHit) << " coarse " << m.nCoarse << " refine " << m.nRefine
+              << " fetches " << counts.nFetches << "\n";
+    if (g.record.Covered(i))
+        std::cout << "result GL:  uv " << Hex(g.record.hitU[i]) << ", " << Hex(g.record.hitV[i])
+                  << " depth " << Hex(g.record.hitDepth[i]) << " coarse " << g.record.nCoarse[i]
+                  << " refine " << g.record.nRefine[i] << " fetches " << g.record.nFetches[i]
+                  << "\n";
+    else
+        std::cout << "result GL:  pixel not covered\n";
+}
+
+void PrintText(const GlCompareResult& r, const GlCompareArgs& a, const HeightField& field) {
+    const RenderSettings& s = a.options.settings;
+    const RecordComparison& c = r.comparison;
+    std::printf("reliefsim glcompare: %s on %s at %dx%d, %s %s %s; %s\n", s.method.c_str(),
+                field.name.c_str(), s.width, s.height, a.options.textureFormat.c_str(),
+                std::string(ToString(s.sampler.filter)).c_str(),
+                std::string(ToString(s.sampler.wrap)).c_str(), r.renderer.c_str());
+    std::printf("pixels %" PRIu64 " covered by both; coverage differs at %" PRIu64
+                " (C++ only %" PRIu64 ", llvmpipe only %" PRIu64 "); flags differ at %" PRIu64
+                "\n",
+                c.pixels, c.cpuOnly + c.glOnly, c.cpuOnly, c.glOnly, c.flagsDiffer);
+    auto row = [&](const char* name, const FieldAgreement& f, const char* unit) {
+        std::printf("  %-11s %8.3f%% identical (%" PRIu64 " / %" PRIu64 "), max diff %" PRIu64
+                    " %s\n",
+                    name, 100.0 * f.fraction, f.identical, c.pixels, f.maxDiff, unit);
+    };
+    row("hit_uv", c.hitUv, "ulp");
+    row("hit_depth", c.hitDepth, "ulp");
+    row("iterations", c.iterations, "");
+    row("fetches", c.fetches, "");
+    if (r.gl.lanes.available) {
+        const LaneCostCheck& l = r.laneCost;
+        std::printf("lane cost (4x2 groups x 8 lanes): model %" PRIu64 " %s measured %" PRIu64
+                    " lane-fetches; groups model %" PRIu64 " / run %" PRIu64 ", %" PRIu64
+                    " mismatched; subgroup size %u, shape violations %" PRIu64
+                    "; summary lane_fetches_4x2 (blocks not split by triangle) %" PRIu64 "\n",
+                    l.modelLaneFetches, l.Equal() ? "==" : "!=", l.measuredLaneFetches,
+                    l.modelGroups, l.measuredGroups, l.groupsMismatched,
+                    r.gl.lanes.subgroupSize, r.gl.lanes.shapeViolations, l.summaryLaneFetches);
+    } else {
+        std::printf("lane cost: not measured (GL_ARB_shader_ballot unavailable)\n");
+    }
+    if (c.firstDiffs.empty()) {
+        std::printf("first differing pixels: none\n");
+    } else {
+        std::printf("first differing pixels (trace with the command shown):\n");
+        for (const glm::ivec2& p : c.firstDiffs)
+            std::printf("  %d,%d: %s\n", p.x, p.y, TraceCommand(a.options, p.x, p.y).c_str());
+    }
+}
+
+void RunGlCompareCommand(GlCompareArgs& a) {
+    ResolveRenderSettings(a.options);
+    const RenderSettings& s = a.options.settings;
+    if (s.sampler.precision == Precision::Gpu8)
+        throw Error("--texture-format: the gpu8 precision has no llvmpipe twin");
+    HeightField field = LoadRenderMap(a.options);
+    if (!a.tracePixel.empty()) {
+        int x = 0, y = 0;
+        char comma = 0, extra = 0;
+        if (std::sscanf(a.tracePixel.c_str(), "%d%c%d%c", &x, &comma, &y, &extra) != 3 ||
+            comma != ',')
+            throw Error("--trace-pixel \"" + a.tracePixel + "\": expected X,Y, e.g. 10,20");
+        PrintTrace(a, field, x, y);
+        return;
+    }
+    GlReference gl(s.threads > 0 ? s.threads : -1);
+    GlCompareResult r = RunGlCompare(field, s, gl);
+    const RecordComparison& c = r.comparison;
+    if (!a.heatmap.empty())
+        WriteHeatmapPng(a.heatmap, c.diffMap.data(), c.mask.data(), s.width, s.height,
+                        {0.0f, 5.0f, "inferno",
+                         "differing fields (0-4; 5 = coverage), " + s.method + " C++ vs llvmpipe"});
+    if (a.json) {
+        std::cout << GlCompareJson(r, a.options, field).dump(2) << "\n";
+    } else {
+        PrintText(r, a, field);
+        if (!a.heatmap.empty()) std::printf("wrote %s\n", a.heatmap.c_str());
+    }
+}
+
+}  // namespace
+
+GlScene MakeGlScene(const RenderSettings& s) {
+    if (s.sampler.precision == Precision::Gpu8)
+        throw Error("sampler precision gpu8: has no GL twin (llvmpipe filters R8 in 8.8 fixed "
+                    "point: use r8 / llvmpipe8)");
+    GlScene g;
+    g.width = s.width;
+    g.height = s.height;
+    g.uniforms = MakeViewUniforms(s);
+    g.clipFromWorld = SceneCamera(s).clipFromWorld;
+    g.mesh = MakePlane(s.tiling);  // same positions and indices as the pipeline's plane
+    g.sampler = s.sampler;
+    g.format = s.sampler.precision == Precision::Llvmpipe8 ? TextureFormat::R8
+                                                            : TextureFormat::R32F;
+    const MethodInfo& method = FindMethod(s.method);
+    g.kernel = MakeKernel(method, ResolveParams(method, s.set));
+    return g;
+}
+
+std::vector<int16_t> SceneTriangles(const RenderSettings& s) {
+    return TrianglePerPixel(MakePlane(s.tiling), SceneCamera(s), s.width, s.height);
+}
+
+GlCompareResult RunGlCompare(const HeightField& field, const RenderSettings& s,
+                             GlReference& gl) {
+    GlCompareResult r;
+    r.cpu = Render(field, s);
+    r.gl = gl.Render(field, MakeGlScene(s));
+    r.renderer = gl.Renderer();
+    r.comparison = CompareRecords(r.cpu.record, r.gl.record);
+    if (r.gl.lanes.available)
+        r.laneCost = CheckLaneCost(r.cpu.record, SceneTriangles(s), r.gl.lanes,
+                                   r.cpu.summary.laneFetches4x2);
+    return r;
+}
+
+std::string TraceCommand(const RenderOptions& o, int x, int y) {
+    const RenderSettings& s = o.settings;
+    std::ostringstream cmd;
+    cmd << "reliefsim glcompare --map " << o.map.map;
+    if (o.map.channel != "auto") cmd << " --map-channel " << o.map.channel;
+    if (o.map.stores != "height") cmd << " --map-stores " << o.map.stores;
+    cmd << " --method " << s.method;
+    for (const auto& kv : s.set) cmd << " --set " << kv;
+    cmd << " --size " << s.width << "x" << s.height << " --view-angle " << Number(s.viewAngle)
+        << " --azimuth " << Number(s.azimuth) << " --distance " << Number(s.distance)
+        << " --fov " << Number(s.fovY) << " --depth-scale " << Number(s.depthScale)
+        << " --tiling " << Number(s.tiling) << " --filter " << ToString(s.sampler.filter)
+        << " --wrap " << ToString(s.sampler.wrap) << " --texture-format " << o.textureFormat
+        << " --trace-pixel " << x << "," << y;
+    return cmd.str();
+}
+
+nlohmann::json GlCompareJson(const GlCompareResult& r, const RenderOptions& o,
+                             const HeightField& field) {
+    const RecordComparison& c = r.comparison;
+    const RenderSettings& s = o.settings;
+    nlohmann::json j;
+    j["method"] = s.method;
+    j["map"] = field.name;
+    j["width"] = s.width;
+    j["height"] = s.height;
+    j["texture_format"] = o.textureFormat;
+    j["filter"] = std::string(ToString(s.sampler.filter));
+    j["wrap"] = std::string(ToString(s.sampler.wrap));
+    j["renderer"] = r.renderer;
+    j["pixels"] = c.pixels;
+    j["identical"] = {{"hit_uv", c.hitUv.fraction},
+                      {"hit_depth", c.hitDepth.fraction},
+                      {"iterations", c.iterations.fraction},
+                      {"fetches", c.fetches.fraction}};
+    j["max_diff"] = {{"hit_uv_ulps", c.hitUv.maxDiff},
+                     {"hit_depth_ulps", c.hitDepth.maxDiff},
+                     {"iterations", c.iterations.maxDiff},
+                     {"fetches", c.fetches.maxDiff}};
+    j["coverage"] = {{"cpu_only", c.cpuOnly}, {"gl_only", c.glOnly}};
+    j["flags_differ"] = c.flagsDiffer;
+    j["all_identical"] = c.AllIdentical();
+    nlohmann::json diffs = nlohmann::json::array();
+    for (const glm::ivec2& p : c.firstDiffs)
+        diffs.push_back({{"x", p.x}, {"y", p.y}, {"trace", TraceCommand(o, p.x, p.y)}});
+    j["first_differences"] = diffs;
+    if (r.gl.lanes.available) {
+        const LaneCostCheck& l = r.laneCost;
+        j["lane_cost"] = {{"model_lane_fetches", l.modelLaneFetches},
+                          {"measured_lane_fetches", l.measuredLaneFetches},
+                          {"model_groups", l.modelGroups},
+                          {"measured_groups", l.measuredGroups},
+                          {"groups_mismatched", l.groupsMismatched},
+                          {"equal", l.Equal()},
+                          {"subgroup_size", r.gl.lanes.subgroupSize},
+                          {"shape_violations", r.gl.lanes.shapeViolations},
+                          {"summary_lane_fetches_4x2", l.summaryLaneFetches}};
+    }
+    return j;
+}
+
+void RegisterGlCompareCommand(CLI::App& root) {
+    auto a = std::make_shared<GlCompareArgs>();
+    auto* cmd = root.add_subcommand(
+        "glcompare",
+        "render with the C++ simulator and with the GLSL twins on Mesa llvmpipe (EGL "
+        "surfaceless); report per field the share of bit-identical pixels, max ulps, the "
+        "first differing pixels, the lane-cost check, and write a difference heatmap");
+    AddRenderOptions(cmd, a->options);
+    cmd->add_flag("--json", a->json, "print the report as JSON");
+    cmd->add_option("--heatmap", a->heatmap,
+                    "difference heatmap PNG (differing fields per pixel); empty: none")
+        ->capture_default_str();
+    cmd->add_option("--trace-pixel", a->tracePixel,
+                    "X,Y (row 0 at the top): print both paths' fetches for one pixel instead");
+    cmd->callback([a] { RunGlCompareCommand(*a); });
+}
+
+}  // namespace reliefsim

@@ -1,0 +1,44 @@
+// `reliefsim glcompare`: the C++ frame loop against the GLSL twins on llvmpipe, bit for bit.
+// Only built when rs_glref exists (EGL and GL found).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "app/pipeline.h"
+#include "app/render_options.h"
+#include "glref/gl_reference.h"
+#include "glref/record_compare.h"
+
+namespace reliefsim {
+
+/// The GL scene of the settings: the same camera, plane, uniforms, sampler and kernel as
+/// Render(). Precision Float -> R32F, Llvmpipe8 -> R8; Gpu8 has no GL twin (throws Error).
+GlScene MakeGlScene(const RenderSettings& settings);
+
+/// The C++ triangle index of each pixel (see TrianglePerPixel) for the settings' scene.
+std::vector<int16_t> SceneTriangles(const RenderSettings& settings);
+
+struct GlCompareResult {
+    RenderOutput cpu;
+    GlFrame gl;
+    RecordComparison comparison;
+    LaneCostCheck laneCost;  ///< valid when gl.lanes.available
+    std::string renderer;
+};
+
+/// Renders with both paths and compares.
+GlCompareResult RunGlCompare(const HeightField& field, const RenderSettings& settings,
+                             GlReference& gl);
+
+/// The JSON report: pixels, identical{hit_uv, hit_depth, iterations, fetches}, max_diff,
+/// coverage, first_differences (with trace commands), lane_cost.
+nlohmann::json GlCompareJson(const GlCompareResult& r, const RenderOptions& options,
+                             const HeightField& field);
+
+/// The command line that re-runs glcompare for one pixel with a two-path fetch trace.
+std::string TraceCommand(const RenderOptions& options, int x, int y);
+
+}  // namespace reliefsim

@@ -1,0 +1,146 @@
+// Bit-level record comparison and the lane-cost check.
+#include "glref/record_compare.h"
+
+#include <algorithm>
+#include <cstring>
+
+#include "core/error.h"
+#include "raster/rasterizer.h"
+
+namespace reliefsim {
+
+uint64_t UlpDistance(float a, float b) {
+    auto ordered = [](float f) {
+        int32_t i;
+        std::memcpy(&i, &f, sizeof i);
+        // Map the sign-magnitude bit pattern onto a monotonic integer line (-0 just below +0).
+        return i >= 0 ? int64_t(i) : -int64_t(i & 0x7fffffff) - 1;
+    };
+    const int64_t d = ordered(a) - ordered(b);
+    return uint64_t(d < 0 ? -d : d);
+}
+
+namespace {
+bool SameBits(float a, float b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+void Finish(FieldAgreement& f, uint64_t pixels) {
+    f.fraction = pixels ? double(f.identical) / double(pixels) : 1.0;
+}
+}  // namespace
+
+RecordComparison CompareRecords(const FrameRecord& cpu, const FrameRecord& gl, int maxListed) {
+    if (cpu.width != gl.width || cpu.height != gl.height)
+        throw Error("record comparison: sizes differ (" + std::to_string(cpu.width) + "x" +
+                    std::to_string(cpu.height) + " vs " + std::to_string(gl.width) + "x" +
+                    std::to_string(gl.height) + ")");
+    RecordComparison c;
+    const size_t n = size_t(cpu.width) * size_t(cpu.height);
+    c.diffMap.assign(n, 0.0f);
+    c.mask.assign(n, 0);
+    for (int y = 0; y < cpu.height; ++y) {
+        for (int x = 0; x < cpu.width; ++x) {
+            const size_t i = cpu.Index(x, y);
+            const bool a = cpu.Covered(i), b = gl.Covered(i);
+            if (!a && !b) continue;
+            c.mask[i] = 1;
+            if (a != b) {
+                (a ? c.cpuOnly : c.glOnly) += 1;
+                c.diffMap[i] = 5.0f;
+                if (int(c.firstDiffs.size()) < maxListed) c.firstDiffs.push_back({x, y});
+                continue;
+            }
+            ++c.pixels;
+            int differing = 0;
+            const bool uvSame = SameBits(cpu.hitU[i], gl.hitU[i]) && SameBits(cpu.hitV[i], gl.hitV[i]);
+            c.hitUv.identical += uvSame;
+            differing += !uvSame;
+            c.hitUv.maxDiff = std::max({c.hitUv.maxDiff, UlpDistance(cpu.hitU[i], gl.hitU[i]),
+                                        UlpDistance(cpu.hitV[i], gl.hitV[i])});
+            const bool depthSame = SameBits(cpu.hitDepth[i], gl.hitDepth[i]);
+            c.hitDepth.identical += depthSame;
+            differing += !depthSame;
+            c.hitDepth.maxDiff =
+                std::max(c.hitDepth.maxDiff, UlpDistance(cpu.hitDepth[i], gl.hitDepth[i]));
+            const bool itSame = cpu.nCoarse[i] == gl.nCoarse[i] && cpu.nRefine[i] == gl.nRefine[i];
+            c.iterations.identical += itSame;
+            differing += !itSame;
+            const int64_t itA = int64_t(cpu.nCoarse[i]) + cpu.nRefine[i];
+            const int64_t itB = int64_t(gl.nCoarse[i]) + gl.nRefine[i];
+            c.iterations.maxDiff = std::max(c.iterations.maxDiff, uint64_t(std::abs(itA - itB)));
+            const bool fetchSame = cpu.nFetches[i] == gl.nFetches[i];
+            c.fetches.identical += fetchSame;
+            differing += !fetchSame;
+            c.fetches.maxDiff = std::max(
+                c.fetches.maxDiff,
+                uint64_t(std::abs(int64_t(cpu.nFetches[i]) - int64_t(gl.nFetches[i]))));
+            const uint8_t flagBits = kFlagBudgetExhausted | kFlagNoHit;
+            if ((cpu.flags[i] & flagBits) != (gl.flags[i] & flagBits)) ++c.flagsDiffer;
+            c.diffMap[i] = float(differing);
+            if (differing > 0 && int(c.firstDiffs.size()) < maxListed)
+                c.firstDiffs.push_back({x, y});
+        }
+    }
+    Finish(c.hitUv, c.pixels);
+    Finish(c.hitDepth, c.pixels);
+    Finish(c.iterations, c.pixels);
+    Finish(c.fetches, c.pixels);
+    return c;
+}
+
+namespace {
+
+class TriangleIdProgram {
+public:
+    TriangleIdProgram(std::vector<int16_t>& ids, int width) : ids_(ids), width_(width) {}
+    void ShadeQuad(const QuadFragment& q, int /*tileIndex*/) {
+        for (int k = 0; k < 4; ++k) {
+            if (!((q.coveredMask >> k) & 1u)) continue;
+            const int x = q.pixel0.x + (k & 1), y = q.pixel0.y + (k >> 1);
+            ids_[size_t(y) * size_t(width_) + size_t(x)] = int16_t(q.triangle);
+        }
+    }
+
+private:
+    std::vector<int16_t>& ids_;
+    int width_;
+};
+
+}  // namespace
+
+std::vector<int16_t> TrianglePerPixel(const Mesh& mesh, const Camera& camera, int width,
+                                      int height) {
+    std::vector<int16_t> ids(size_t(width) * size_t(height), int16_t(-1));
+    TriangleIdProgram program(ids, width);
+    RasterizeFrame(mesh, camera, width, height, program);
+    return ids;
+}
+
+LaneCostCheck CheckLaneCost(const FrameRecord& cpu, const std::vector<int16_t>& cpuTriangle,
+                            const LaneMeasurement& lanes, uint64_t summaryLaneFetches) {
+    if (!lanes.available) throw Error("lane-cost check: no lane measurement (GL_ARB_shader_ballot)");
+    LaneCostCheck c;
+    c.summaryLaneFetches = summaryLaneFetches;
+    const size_t nGroups = lanes.groupTrips.size();
+    std::vector<uint32_t> modelTrips(nGroups, 0);
+    std::vector<uint8_t> used(nGroups, 0);
+    for (int y = 0; y < cpu.height; ++y)
+        for (int x = 0; x < cpu.width; ++x) {
+            const size_t i = cpu.Index(x, y);
+            if (!cpu.Covered(i) || cpuTriangle[i] < 0) continue;
+            const size_t key = (size_t(y / 2) * size_t(lanes.blocksX) + size_t(x / 4)) *
+                                   size_t(lanes.nTriangles) +
+                               size_t(cpuTriangle[i]);
+            if (key >= nGroups) throw Error("lane-cost check: group index out of range");
+            used[key] = 1;
+            modelTrips[key] = std::max(modelTrips[key], cpu.nFetches[i]);
+        }
+    for (size_t g = 0; g < nGroups; ++g) {
+        c.modelGroups += used[g];
+        c.modelLaneFetches += uint64_t(c.lanesPerGroup) * modelTrips[g];
+        c.measuredLaneFetches += uint64_t(c.lanesPerGroup) * lanes.groupTrips[g];
+        c.groupsMismatched += modelTrips[g] != lanes.groupTrips[g];
+    }
+    c.measuredGroups = lanes.groupRuns;
+    return c;
+}
+
+}  // namespace reliefsim

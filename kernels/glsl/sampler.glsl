@@ -1,0 +1,9 @@
+// GLSL twin of texture/sampler.h Sample(): one fetch of the height texture. The GL sampler
+// object carries filter (GL_LINEAR, GL_NEAREST, or GL_LINEAR with the GL_MIN reduction for
+// min4), wrap (GL_REPEAT / GL_CLAMP_TO_EDGE) and format (R32F: llvmpipe's float SoA path;
+// R8: its 8.8 fixed-point AoS path). The texture has one level and the lod is explicit, so no
+// derivative or lod arithmetic enters (research/llvmpipe.md §2.5).
+
+uniform sampler2D uHeights;  // depth in [0,1], texel (i, j) centred at ((i+0.5)/W, (j+0.5)/H)
+
+float SampleHeight(vec2 uv) { return textureLod(uHeights, uv, 0.0).r; }
