@@ -141,6 +141,11 @@ void PrintText(const GlCompareResult& r, const GlCompareArgs& a, const HeightFie
                     l.modelLaneFetches, l.Equal() ? "==" : "!=", l.measuredLaneFetches,
                     l.modelGroups, l.measuredGroups, l.groupsMismatched,
                     r.gl.lanes.subgroupSize, r.gl.lanes.shapeViolations, l.summaryLaneFetches);
+        for (const LaneCostCheck::Mismatch& mm : l.firstMismatches)
+            std::printf("  group at pixels %d..%d, rows %d..%d, triangle %d: model %u trips, "
+                        "measured %u\n",
+                        4 * mm.blockX, 4 * mm.blockX + 3, 2 * mm.blockY, 2 * mm.blockY + 1,
+                        mm.triangle, mm.modelTrips, mm.measuredTrips);
     } else {
         std::printf("lane cost: not measured (GL_ARB_shader_ballot unavailable)\n");
     }
@@ -194,7 +199,9 @@ GlScene MakeGlScene(const RenderSettings& s) {
     g.height = s.height;
     g.uniforms = MakeViewUniforms(s);
     g.clipFromWorld = SceneCamera(s).clipFromWorld;
-    g.mesh = MakePlane(s.tiling);  // same positions and indices as the pipeline's plane
+    // The pipeline's plane (same positions and indices as MakePlane), pre-clipped so that
+    // llvmpipe rasterizes exactly the pieces the lane-cost model knows about.
+    g.mesh = ClipMeshToViewport(MakePlane(s.tiling), g.clipFromWorld);
     g.sampler = s.sampler;
     g.format = s.sampler.precision == Precision::Llvmpipe8 ? TextureFormat::R8
                                                             : TextureFormat::R32F;
@@ -204,7 +211,9 @@ GlScene MakeGlScene(const RenderSettings& s) {
 }
 
 std::vector<int16_t> SceneTriangles(const RenderSettings& s) {
-    return TrianglePerPixel(MakePlane(s.tiling), SceneCamera(s), s.width, s.height);
+    const Camera camera = SceneCamera(s);
+    return TrianglePerPixel(ClipMeshToViewport(MakePlane(s.tiling), camera.clipFromWorld),
+                            camera, s.width, s.height);
 }
 
 GlCompareResult RunGlCompare(const HeightField& field, const RenderSettings& s,

@@ -7,6 +7,8 @@
 
 #include <glm/vec2.hpp>
 
+#include <glm/mat4x4.hpp>
+
 #include "core/record.h"
 #include "glref/gl_reference.h"
 #include "raster/camera.h"
@@ -51,6 +53,14 @@ uint64_t UlpDistance(float a, float b);
 RecordComparison CompareRecords(const FrameRecord& cpu, const FrameRecord& gl,
                                 int maxListed = 10);
 
+/// The mesh clipped in world space to the camera's side planes, each pulled in by 2^-12 of w
+/// (far less than half a pixel), and fan-triangulated from each polygon's first vertex.
+/// llvmpipe's draw module clips triangles that leave the viewport and rasterizes the pieces
+/// separately, so a 4x2 block on a piece boundary runs once per piece; pre-clipping on the
+/// CPU makes the pieces explicit and identical in both paths: GL never clips again, and
+/// gl_PrimitiveID and the C++ triangle index name the same piece. Only positions are kept.
+Mesh ClipMeshToViewport(const Mesh& mesh, const glm::mat4& clipFromWorld);
+
 /// gl_PrimitiveID of each covered pixel as the C++ rasterizer assigns it (triangle index),
 /// -1 where no triangle covers it.
 std::vector<int16_t> TrianglePerPixel(const Mesh& mesh, const Camera& camera, int width,
@@ -66,6 +76,13 @@ struct LaneCostCheck {
     uint64_t summaryLaneFetches = 0;   ///< metrics/summary.h laneFetches4x2 (blocks not
                                        ///< split by triangle)
     uint64_t groupsMismatched = 0;     ///< groups whose measured trips != model trips
+    /// The first mismatched groups: block (x, y) in 4x2 units, triangle, model and measured
+    /// trips.
+    struct Mismatch {
+        int blockX, blockY, triangle;
+        uint32_t modelTrips, measuredTrips;
+    };
+    std::vector<Mismatch> firstMismatches;
     bool Equal() const {
         return groupsMismatched == 0 && modelGroups == measuredGroups &&
                modelLaneFetches == measuredLaneFetches;
