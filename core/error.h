@@ -45,6 +45,14 @@ template <typename A, typename B>
 #define RS_CHECK_LE(a, b) RS_CHECK_OP(a, <=, b)
 #define RS_CHECK_LT(a, b) RS_CHECK_OP(a, <, b)
 
+/// Forces inlining of small hot functions (samplers, wrap arithmetic) that GCC would otherwise
+/// leave as calls inside kernel loops.
+#if defined(__GNUC__)
+#define RS_INLINE inline __attribute__((always_inline))
+#else
+#define RS_INLINE inline
+#endif
+
 #ifdef NDEBUG
 #define RS_DCHECK(cond) ((void)0)
 #else

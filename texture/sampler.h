@@ -9,6 +9,7 @@
 
 #include <glm/vec2.hpp>
 
+#include "core/error.h"
 #include "texture/height_field.h"
 
 namespace reliefsim {
@@ -54,7 +55,7 @@ namespace detail {
 
 /// Float to int as x86 cvttss2si does it: truncation, INT_MIN when out of range or NaN
 /// (a plain cast would be undefined behaviour there).
-inline int TruncToInt(float f) {
+RS_INLINE int TruncToInt(float f) {
     return (f >= -2147483648.0f && f < 2147483648.0f) ? int(f) : INT_MIN;
 }
 inline bool IsPowerOfTwo(int n) { return n > 0 && (n & (n - 1)) == 0; }
@@ -65,7 +66,7 @@ struct LinearAxis {
     float w;  ///< weight of i1
 };
 
-inline LinearAxis WrapLinear(float u, int n, WrapMode wrap) {
+RS_INLINE LinearAxis WrapLinear(float u, int n, WrapMode wrap) {
     const float fn = float(n);
     LinearAxis a;
     if (wrap == WrapMode::Clamp) {
@@ -145,7 +146,7 @@ inline int Lerp8(int w, int a, int b) { return (a + ((w * (b - a) * 128 + 16384)
 inline float QuantizeWeight8(float w) { return std::nearbyint(w * 256.0f) * (1.0f / 256.0f); }
 
 /// Texel index of a nearest lookup (research/llvmpipe.md §2.3).
-inline int WrapNearest(float u, int n, WrapMode wrap) {
+RS_INLINE int WrapNearest(float u, int n, WrapMode wrap) {
     const float fn = float(n);
     if (wrap == WrapMode::Clamp) {
         int i = TruncToInt(std::trunc(u * fn));
@@ -171,7 +172,7 @@ public:
         : field_(&field), state_(state), counts_(counts) {}
 
     /// One fetch with the state's filter. Returns depth in [0,1].
-    float Sample(glm::vec2 uv) {
+    RS_INLINE float Sample(glm::vec2 uv) {
         switch (state_.filter) {
             case Filter::Nearest: return SampleNearest(uv);
             case Filter::Min4: return SampleMin4(uv);
@@ -181,7 +182,7 @@ public:
     }
 
     /// One fetch, 1 texel read.
-    float SampleNearest(glm::vec2 uv) {
+    RS_INLINE float SampleNearest(glm::vec2 uv) {
         CountFetch();
         return Texel(detail::WrapNearest(uv.x, field_->width, state_.wrap),
                      detail::WrapNearest(uv.y, field_->height, state_.wrap));
@@ -190,7 +191,7 @@ public:
     /// One fetch, 4 texel reads. Float precision: x lerp then y lerp, each fmaf(w, b - a, a)
     /// (llvmpipe §2.1). Llvmpipe8: the 8.8 fixed-point model of §2.2 on depth8. Gpu8: as
     /// float with weights rounded to 1/256.
-    float SampleBilinear(glm::vec2 uv) {
+    RS_INLINE float SampleBilinear(glm::vec2 uv) {
         if (state_.precision == Precision::Llvmpipe8) return SampleBilinearFixed8(uv);
         CountFetch();
         detail::LinearAxis s = detail::WrapLinear(uv.x, field_->width, state_.wrap);
@@ -221,7 +222,7 @@ public:
 
     /// One fetch, 4 texel reads: the minimum over the bilinear footprint, ignoring texels whose
     /// weight is exactly 0 (GL_MIN reduction as llvmpipe does it, §2.6).
-    float SampleMin4(glm::vec2 uv) {
+    RS_INLINE float SampleMin4(glm::vec2 uv) {
         CountFetch();
         detail::LinearAxis s = detail::WrapLinear(uv.x, field_->width, state_.wrap);
         detail::LinearAxis t = detail::WrapLinear(uv.y, field_->height, state_.wrap);
@@ -243,10 +244,10 @@ public:
     FetchCounts* Counts() const { return counts_; }
 
 private:
-    void CountFetch() {
+    RS_INLINE void CountFetch() {
         if constexpr (kCount) ++counts_->nFetches;
     }
-    float Texel(int i, int j) {
+    RS_INLINE float Texel(int i, int j) {
         if constexpr (kCount) ++counts_->nTexelReads;
         return field_->depth[size_t(j) * size_t(field_->width) + size_t(i)];
     }
