@@ -344,9 +344,15 @@ std::string ConeMapStatsJson(const ConeMap& m, const ConeMapStats& s, ConeEncodi
 
 HeightField MakeSinusoidMap(int width, int height, float t) {
     HeightField hf;
+    FillSinusoidMap(hf, width, height, t);
+    return hf;
+}
+
+void FillSinusoidMap(HeightField& hf, int width, int height, float t) {
     hf.width = width;
     hf.height = height;
     hf.name = "sinusoids";
+    hf.depth8.clear();
     hf.depth.resize(size_t(width) * size_t(height));
     constexpr double kTwoPi = 6.283185307179586;
     // (cycles in u, cycles in v, speed in cycles/s, amplitude): integer cycles keep it periodic.
@@ -375,7 +381,6 @@ HeightField MakeSinusoidMap(int width, int height, float t) {
                      cu[size_t(i) * 4 + w] * sv[size_t(j) * 4 + w];
             hf.depth[size_t(j) * size_t(width) + size_t(i)] = float(0.5 + h);
         }
-    return hf;
 }
 
 }  // namespace reliefsim

@@ -105,6 +105,27 @@ struct AdaptiveStats {
 ConeMap GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float threshold,
                                   int levels = 3, AdaptiveStats* stats = nullptr);
 
+/// Buffers reused across calls (pyramid levels, sorted block offsets, output), so that a map
+/// regenerated every frame (000's water demo) allocates and page-faults nothing after the first
+/// frame. Not thread-safe: one workspace per caller thread.
+class AdaptiveWorkspace {
+public:
+    AdaptiveWorkspace();
+    ~AdaptiveWorkspace();
+    AdaptiveWorkspace(const AdaptiveWorkspace&) = delete;
+    AdaptiveWorkspace& operator=(const AdaptiveWorkspace&) = delete;
+    struct Impl;
+    Impl& Get() { return *impl; }
+
+private:
+    Impl* impl;
+};
+
+/// As above, writing into `out` (its storage is reused when the size matches). Same result.
+void GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float threshold, int levels,
+                               AdaptiveWorkspace& ws, ConeMap& out,
+                               AdaptiveStats* stats = nullptr);
+
 /// Encodes to `enc` and decodes back: the ratios a kernel sees. Codes (u8/u16) go to *codes
 /// when given. Never widens: decoded <= input for every value. Float: values unchanged.
 ConeMap QuantizeConeMap(const ConeMap& m, ConeEncoding enc, std::vector<uint16_t>* codes = nullptr);
@@ -144,5 +165,7 @@ ConeMap LoadExternalConeMap(const std::string& path, ConeKind kind, int channel,
 /// (seconds), depth in [0.05, 0.95], periodic in u and v. Regenerated every frame by
 /// `reliefsim maps --animate N`.
 HeightField MakeSinusoidMap(int width, int height, float t);
+/// The same into an existing field (storage reused; name, size and depths overwritten).
+void FillSinusoidMap(HeightField& hf, int width, int height, float t);
 
 }  // namespace reliefsim

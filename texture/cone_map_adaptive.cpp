@@ -1,6 +1,7 @@
 // Adaptive hierarchical ACM preprocessing (000 Algorithm 1) with a guarantee: every block's
 // ratio bounds all texels of the block from below, so copying a parent's ratio never widens.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <vector>
 
@@ -126,8 +127,32 @@ int TrailingZeros(int v) {
 
 }  // namespace
 
+/// Everything the adaptive generator allocates, kept between calls. Offsets depend only on the
+/// size, kind and level, so they are rebuilt only when one of those changes.
+struct AdaptiveWorkspace::Impl {
+    std::vector<Level> levels;                     ///< [1..nL] used; [0] is the field itself
+    std::vector<std::vector<BlockOffset>> offs;    ///< per level
+    std::vector<std::array<int, 4>> offsKey;       ///< (W, H, kind, level) of offs[l]
+    TiledOffsets tiled;
+    std::array<int, 3> tiledKey{-1, -1, -1};
+    std::vector<float> win;
+    std::vector<float> ratio1;                     ///< level-1 block ratios as floats
+    std::vector<int64_t> nCopied, nSearched;       ///< per row
+};
+
+AdaptiveWorkspace::AdaptiveWorkspace() : impl(new Impl) {}
+AdaptiveWorkspace::~AdaptiveWorkspace() { delete impl; }
+
 ConeMap GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float threshold,
                                   int levels, AdaptiveStats* stats) {
+    AdaptiveWorkspace ws;
+    ConeMap m;
+    GenerateAdaptiveSectorMap(hf, kind, threshold, levels, ws, m, stats);
+    return m;
+}
+
+void GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float threshold, int levels,
+                               AdaptiveWorkspace& workspace, ConeMap& m, AdaptiveStats* stats) {
     if (!(kind == ConeKind::Cone || kind == ConeKind::Quad || kind == ConeKind::Acm4 ||
           kind == ConeKind::Acm8))
         throw Error("--adaptive: applies to kinds \"cone\", \"quad\", \"acm4\", \"acm8\"; got \"" +
@@ -138,40 +163,50 @@ ConeMap GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float th
     const Geometry g = MakeGeometry(hf.width, hf.height);
     const int nS = SectorCount(kind);
     const int W = hf.width, H = hf.height;
+    AdaptiveWorkspace::Impl& ws = workspace.Get();
     // Blocks must tile the texture evenly (exact gaps and sectors): sizes divisible by 2^l.
     const int nL = std::max(0, std::min({levels, TrailingZeros(W), TrailingZeros(H)}));
 
-    std::vector<Level> L(size_t(nL) + 1);
-    L[0].nx = W;
-    L[0].ny = H;
-    L[0].size = 1;
-    L[0].dmin = hf.depth;
-    L[0].dmax = hf.depth;
+    if (ws.levels.size() < size_t(nL) + 1) ws.levels.resize(size_t(nL) + 1);
+    if (ws.offs.size() < size_t(nL) + 1) {
+        ws.offs.resize(size_t(nL) + 1);
+        ws.offsKey.resize(size_t(nL) + 1, {-1, -1, -1, -1});
+    }
+    std::vector<Level>& L = ws.levels;
     for (int l = 1; l <= nL; ++l) {
         Level& c = L[size_t(l)];
-        const Level& f = L[size_t(l) - 1];
-        c.nx = f.nx / 2;
-        c.ny = f.ny / 2;
-        c.size = f.size * 2;
+        // Level 0 is the field itself (min = max = depth): no copy.
+        const float* fmin = l == 1 ? hf.depth.data() : L[size_t(l) - 1].dmin.data();
+        const float* fmax = l == 1 ? hf.depth.data() : L[size_t(l) - 1].dmax.data();
+        const int fnx = l == 1 ? W : L[size_t(l) - 1].nx;
+        c.nx = (W >> l);
+        c.ny = (H >> l);
+        c.size = 1 << l;
         c.dmin.resize(size_t(c.nx) * size_t(c.ny));
         c.dmax.resize(c.dmin.size());
         for (int j = 0; j < c.ny; ++j)
             for (int i = 0; i < c.nx; ++i) {
                 float mn = 2, mx = -1;
                 for (int d = 0; d < 4; ++d) {
-                    const size_t t = size_t(2 * j + (d >> 1)) * size_t(f.nx) + size_t(2 * i + (d & 1));
-                    mn = std::min(mn, f.dmin[t]);
-                    mx = std::max(mx, f.dmax[t]);
+                    const size_t t = size_t(2 * j + (d >> 1)) * size_t(fnx) + size_t(2 * i + (d & 1));
+                    mn = std::min(mn, fmin[t]);
+                    mx = std::max(mx, fmax[t]);
                 }
                 c.dmin[size_t(j) * size_t(c.nx) + size_t(i)] = mn;
                 c.dmax[size_t(j) * size_t(c.nx) + size_t(i)] = mx;
             }
     }
-    std::vector<int64_t> nCopied(size_t(H), 0), nSearched(size_t(H), 0);
+    ws.nCopied.assign(size_t(H), 0);
+    ws.nSearched.assign(size_t(H), 0);
     for (int l = nL; l >= 1; --l) {
         Level& c = L[size_t(l)];
         c.q.assign(c.dmin.size() * size_t(nS), kInfQ);
-        const std::vector<BlockOffset> offs = MakeBlockOffsets(g, c, kind);
+        const std::array<int, 4> key{W, H, int(kind), l};
+        if (ws.offsKey[size_t(l)] != key) {
+            ws.offs[size_t(l)] = MakeBlockOffsets(g, c, kind);
+            ws.offsKey[size_t(l)] = key;
+        }
+        const std::vector<BlockOffset>& offs = ws.offs[size_t(l)];
         const Level* parent = l < nL ? &L[size_t(l) + 1] : nullptr;
         tbb::parallel_for(tbb::blocked_range<int>(0, c.ny), [&](const tbb::blocked_range<int>& r) {
             for (int j = r.begin(); j < r.end(); ++j)
@@ -188,13 +223,17 @@ ConeMap GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float th
                 }
         });
     }
-    ConeMap m;
     m.kind = kind;
     m.width = W;
     m.height = H;
     m.channels = nS;
-    m.values.assign(size_t(W) * size_t(H) * size_t(nS), 0.0f);
+    m.values.resize(size_t(W) * size_t(H) * size_t(nS));
     const Level* parent = nL >= 1 ? &L[1] : nullptr;
+    // A copied texel stores its parent's ratio: convert each level-1 block once.
+    if (parent) {
+        ws.ratio1.resize(parent->q.size());
+        for (size_t t = 0; t < parent->q.size(); ++t) ws.ratio1[t] = RatioFromQ(parent->q[t], g.scale);
+    }
     // Offsets and window minima only when some texel is searched (dynamic maps often copy all).
     bool anySearch = !parent;
     for (int j = 0; j < H && !anySearch; ++j)
@@ -205,38 +244,45 @@ ConeMap GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float th
                 break;
             }
         }
-    const TiledOffsets to = anySearch ? MakeTiledOffsets(g, kind) : TiledOffsets{};
-    const std::vector<float> win = anySearch ? WindowMin(hf) : std::vector<float>{};
+    if (anySearch) {
+        const std::array<int, 3> key{W, H, int(kind)};
+        if (ws.tiledKey != key) {
+            ws.tiled = MakeTiledOffsets(g, kind);
+            ws.tiledKey = key;
+        }
+        ws.win = WindowMin(hf);
+    }
+    const TiledOffsets& to = ws.tiled;
+    const std::vector<float>& win = ws.win;
     tbb::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& r) {
         for (int j = r.begin(); j < r.end(); ++j)
             for (int i = 0; i < W; ++i) {
+                float* out = &m.values[(size_t(j) * size_t(W) + size_t(i)) * size_t(nS)];
+                const float d = hf.At(i, j);
                 double best[kMaxSectors];
                 std::fill(best, best + kMaxSectors, kInfQ);
-                const float d = hf.At(i, j);
-                bool copy = false;
                 if (parent) {
                     const size_t pb = size_t(j / 2) * size_t(parent->nx) + size_t(i / 2);
+                    if (std::abs(d - parent->dmin[pb]) <= threshold) {
+                        ++ws.nCopied[size_t(j)];
+                        std::copy_n(&ws.ratio1[pb * size_t(nS)], nS, out);
+                        continue;
+                    }
                     std::copy_n(&parent->q[pb * size_t(nS)], nS, best);
-                    copy = std::abs(d - parent->dmin[pb]) <= threshold;
                 }
-                if (copy) ++nCopied[size_t(j)];
-                else {
-                    ++nSearched[size_t(j)];
-                    TiledSearch(hf, to, win, dmin, i, j, d, nS, best,
-                                [](int, int, const Offset&) { return true; });
-                }
-                float* out = &m.values[(size_t(j) * size_t(W) + size_t(i)) * size_t(nS)];
+                ++ws.nSearched[size_t(j)];
+                TiledSearch(hf, to, win, dmin, i, j, d, nS, best,
+                            [](int, int, const Offset&) { return true; });
                 for (int k = 0; k < nS; ++k) out[k] = RatioFromQ(best[k], g.scale);
             }
     });
     if (stats) {
         stats->nCopied = stats->nSearched = 0;
         for (int j = 0; j < H; ++j) {
-            stats->nCopied += nCopied[size_t(j)];
-            stats->nSearched += nSearched[size_t(j)];
+            stats->nCopied += ws.nCopied[size_t(j)];
+            stats->nSearched += ws.nSearched[size_t(j)];
         }
     }
-    return m;
 }
 
 }  // namespace reliefsim
