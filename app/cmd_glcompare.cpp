@@ -87,6 +87,7 @@ void PrintTrace(const GlCompareArgs& a, const HeightField& field, int x, int y) 
               << "ray: uvEntry " << Hex(in.uvEntry.x) << ", " << Hex(in.uvEntry.y) << "; dirUv "
               << Hex(in.dirUv.x) << ", " << Hex(in.dirUv.y) << "\n";
     const size_t n = std::max(cpuLog.size(), g.trace.size());
+    bool diverged = false;
     for (size_t k = 0; k < n; ++k) {
         std::cout << "fetch " << k << ":\n";
         if (k < cpuLog.size())
@@ -95,10 +96,12 @@ void PrintTrace(const GlCompareArgs& a, const HeightField& field, int x, int y) 
         if (k < g.trace.size())
             std::cout << "  GL   uv " << Hex(g.trace[k].x) << ", " << Hex(g.trace[k].y)
                       << "  depth " << Hex(g.trace[k].z) << "  t " << Hex(g.trace[k].w) << "\n";
-        if (k < cpuLog.size() && k < g.trace.size() &&
+        if (!diverged && k < cpuLog.size() && k < g.trace.size() &&
             (UlpDistance(cpuLog[k].x, g.trace[k].x) || UlpDistance(cpuLog[k].y, g.trace[k].y) ||
-             UlpDistance(cpuLog[k].z, g.trace[k].z)))
+             UlpDistance(cpuLog[k].z, g.trace[k].z))) {
             std::cout << "  ^ first divergence\n";
+            diverged = true;
+        }
     }
     std::cout << "result C++: uv " << Hex(m.uvHit.x) << ", " << Hex(m.uvHit.y) << " depth "
               << Hex(m.depthHit) << " coarse " << m.nCoarse << " refine " << m.nRefine
@@ -199,9 +202,7 @@ GlScene MakeGlScene(const RenderSettings& s) {
     g.height = s.height;
     g.uniforms = MakeViewUniforms(s);
     g.clipFromWorld = SceneCamera(s).clipFromWorld;
-    // The pipeline's plane (same positions and indices as MakePlane), pre-clipped so that
-    // llvmpipe rasterizes exactly the pieces the lane-cost model knows about.
-    g.mesh = ClipMeshToViewport(MakePlane(s.tiling), g.clipFromWorld);
+    g.mesh = MakePlane(s.tiling);  // same positions and indices as the pipeline's plane
     g.sampler = s.sampler;
     g.format = s.sampler.precision == Precision::Llvmpipe8 ? TextureFormat::R8
                                                             : TextureFormat::R32F;
@@ -220,12 +221,45 @@ GlCompareResult RunGlCompare(const HeightField& field, const RenderSettings& s,
                              GlReference& gl) {
     GlCompareResult r;
     r.cpu = Render(field, s);
-    r.gl = gl.Render(field, MakeGlScene(s));
+    // Run 1, the record: the same plane as the C++ frame loop, drawn as llvmpipe draws it.
+    GlScene scene = MakeGlScene(s);
+    scene.measureLanes = false;
+    r.gl = gl.Render(field, scene);
     r.renderer = gl.Renderer();
     r.comparison = CompareRecords(r.cpu.record, r.gl.record);
-    if (r.gl.lanes.available)
-        r.laneCost = CheckLaneCost(r.cpu.record, SceneTriangles(s), r.gl.lanes,
+    // Run 2, the lanes: the plane pre-clipped into the pieces llvmpipe would rasterize, with
+    // the in-shader trip counters; the model takes each pixel's fetches from the C++ kernel.
+    GlScene laneScene = scene;
+    laneScene.mesh = ClipMeshToViewport(scene.mesh, scene.clipFromWorld);
+    laneScene.measureLanes = true;
+    GlFrame lanes = gl.Render(field, laneScene);
+    r.gl.lanes = lanes.lanes;
+    if (r.gl.lanes.available) {
+        const std::vector<int16_t> triangles = SceneTriangles(s);
+        const FrameRecord& rec = r.cpu.record;
+        std::vector<uint32_t> fetches(triangles.size(), 0);
+        const ViewUniforms uniforms = MakeViewUniforms(s);
+        const Kernel& kernel = scene.kernel;
+        detail::DenormalsAreZeroScope fp;  // as in the frame loop
+        for (int y = 0; y < s.height; ++y)
+            for (int x = 0; x < s.width; ++x) {
+                const size_t i = rec.Index(x, y);
+                if (triangles[i] < 0) continue;
+                if (rec.Covered(i)) {
+                    fetches[i] = rec.nFetches[i];
+                    continue;
+                }
+                // A pixel the pieces cover but the plane does not (a centre within 1/256
+                // pixel of a clipped edge): run the C++ kernel for it.
+                FetchCounts counts;
+                CountingSampler sampler(field, s.sampler, &counts);
+                const MarchInput in = PixelToRay(uniforms, x, y);
+                std::visit([&](const auto& k) { k.March(in, sampler); }, kernel);
+                fetches[i] = counts.nFetches;
+            }
+        r.laneCost = CheckLaneCost(fetches, triangles, s.width, s.height, r.gl.lanes,
                                    r.cpu.summary.laneFetches4x2);
+    }
     return r;
 }
 

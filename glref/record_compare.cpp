@@ -155,7 +155,8 @@ std::vector<int16_t> TrianglePerPixel(const Mesh& mesh, const Camera& camera, in
     return ids;
 }
 
-LaneCostCheck CheckLaneCost(const FrameRecord& cpu, const std::vector<int16_t>& cpuTriangle,
+LaneCostCheck CheckLaneCost(const std::vector<uint32_t>& fetches,
+                            const std::vector<int16_t>& cpuTriangle, int width, int height,
                             const LaneMeasurement& lanes, uint64_t summaryLaneFetches) {
     if (!lanes.available) throw Error("lane-cost check: no lane measurement (GL_ARB_shader_ballot)");
     LaneCostCheck c;
@@ -163,16 +164,16 @@ LaneCostCheck CheckLaneCost(const FrameRecord& cpu, const std::vector<int16_t>& 
     const size_t nGroups = lanes.groupTrips.size();
     std::vector<uint32_t> modelTrips(nGroups, 0);
     std::vector<uint8_t> used(nGroups, 0);
-    for (int y = 0; y < cpu.height; ++y)
-        for (int x = 0; x < cpu.width; ++x) {
-            const size_t i = cpu.Index(x, y);
-            if (!cpu.Covered(i) || cpuTriangle[i] < 0) continue;
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            const size_t i = size_t(y) * size_t(width) + size_t(x);
+            if (cpuTriangle[i] < 0) continue;
             const size_t key = (size_t(y / 2) * size_t(lanes.blocksX) + size_t(x / 4)) *
                                    size_t(lanes.nTriangles) +
                                size_t(cpuTriangle[i]);
             if (key >= nGroups) throw Error("lane-cost check: group index out of range");
             used[key] = 1;
-            modelTrips[key] = std::max(modelTrips[key], cpu.nFetches[i]);
+            modelTrips[key] = std::max(modelTrips[key], fetches[i]);
         }
     for (size_t g = 0; g < nGroups; ++g) {
         c.modelGroups += used[g];

@@ -56,9 +56,12 @@ RecordComparison CompareRecords(const FrameRecord& cpu, const FrameRecord& gl,
 /// The mesh clipped in world space to the camera's side planes, each pulled in by 2^-12 of w
 /// (far less than half a pixel), and fan-triangulated from each polygon's first vertex.
 /// llvmpipe's draw module clips triangles that leave the viewport and rasterizes the pieces
-/// separately, so a 4x2 block on a piece boundary runs once per piece; pre-clipping on the
-/// CPU makes the pieces explicit and identical in both paths: GL never clips again, and
-/// gl_PrimitiveID and the C++ triangle index name the same piece. Only positions are kept.
+/// separately, so a 4x2 block on a piece boundary runs once per piece. The lane-cost run
+/// draws this pre-clipped mesh, so the pieces are explicit and identical in both paths: GL
+/// never clips again, and gl_PrimitiveID and the C++ triangle index name the same piece.
+/// (The record comparison draws the unclipped mesh: the new vertices can move a clipped edge
+/// by up to 1/256 pixel and flip the coverage of a pixel centre lying that close to it.)
+/// Only positions are kept.
 Mesh ClipMeshToViewport(const Mesh& mesh, const glm::mat4& clipFromWorld);
 
 /// gl_PrimitiveID of each covered pixel as the C++ rasterizer assigns it (triangle index),
@@ -89,9 +92,11 @@ struct LaneCostCheck {
     }
 };
 
-/// Model from the C++ record (fetches per pixel) and the C++ triangle of each pixel; the
-/// measurement from the GL frame. Requires lanes.available.
-LaneCostCheck CheckLaneCost(const FrameRecord& cpu, const std::vector<int16_t>& cpuTriangle,
+/// Model from C++ data: the fetches of each pixel (row 0 at the top) and the C++ triangle
+/// (piece) covering it (-1: none); the measurement from the GL frame. Requires
+/// lanes.available.
+LaneCostCheck CheckLaneCost(const std::vector<uint32_t>& fetches,
+                            const std::vector<int16_t>& cpuTriangle, int width, int height,
                             const LaneMeasurement& lanes, uint64_t summaryLaneFetches);
 
 }  // namespace reliefsim

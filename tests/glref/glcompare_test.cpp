@@ -1,0 +1,226 @@
+// The GLSL twins on llvmpipe agree with the C++ frame loop bit for bit, and the lane-cost
+// model equals the trips llvmpipe executes (issue #4).
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <memory>
+#include <string>
+#include <tuple>
+
+#include "app/glcompare.h"
+#include "core/error.h"
+#include "texture/image_io.h"
+
+namespace reliefsim {
+namespace {
+
+/// One llvmpipe context for the whole binary (EGL initialisation costs tens of ms).
+GlReference& Gl() {
+    static std::unique_ptr<GlReference> gl = [] {
+        setenv("MESA_SHADER_CACHE_DISABLE", "true", 0);
+        return std::make_unique<GlReference>();
+    }();
+    return *gl;
+}
+
+struct Case {
+    std::string method, map;
+    int size;
+    TextureFormat format;
+};
+
+void PrintTo(const Case& c, std::ostream* os) {
+    *os << c.method << " on " << c.map << " at " << c.size << "x" << c.size << ", "
+        << ToString(c.format);
+}
+
+HeightField LoadField(const std::string& map, TextureFormat format) {
+    HeightField f = LoadHeightMap(map, MapLoadOptions{});
+    if (format == TextureFormat::R8 && f.depth8.size() != f.depth.size()) f = QuantizeToUnorm8(f);
+    return f;
+}
+
+void ExpectIdentical(const GlCompareResult& r) {
+    const RecordComparison& c = r.comparison;
+    EXPECT_GT(c.pixels, 0u);
+    EXPECT_EQ(c.cpuOnly, 0u);
+    EXPECT_EQ(c.glOnly, 0u);
+    EXPECT_EQ(c.flagsDiffer, 0u);
+    EXPECT_EQ(c.hitUv.identical, c.pixels) << "max " << c.hitUv.maxDiff << " ulp";
+    EXPECT_EQ(c.hitDepth.identical, c.pixels) << "max " << c.hitDepth.maxDiff << " ulp";
+    EXPECT_EQ(c.iterations.identical, c.pixels);
+    EXPECT_EQ(c.fetches.identical, c.pixels);
+    if (!c.firstDiffs.empty())
+        ADD_FAILURE() << "first differing pixel " << c.firstDiffs[0].x << ","
+                      << c.firstDiffs[0].y;
+    ASSERT_TRUE(r.gl.lanes.available) << "GL_ARB_shader_ballot missing";
+    EXPECT_EQ(r.gl.lanes.subgroupSize, 8u);
+    EXPECT_EQ(r.gl.lanes.shapeViolations, 0u);
+    EXPECT_EQ(r.laneCost.groupsMismatched, 0u);
+    EXPECT_EQ(r.laneCost.modelGroups, r.laneCost.measuredGroups);
+    EXPECT_EQ(r.laneCost.modelLaneFetches, r.laneCost.measuredLaneFetches);
+}
+
+class GlCompareMatrix : public testing::TestWithParam<Case> {};
+
+TEST_P(GlCompareMatrix, BitIdenticalAndLaneCostExact) {
+    const Case& c = GetParam();
+    RenderSettings s;
+    s.method = c.method;
+    s.width = s.height = c.size;
+    s.sampler.precision =
+        c.format == TextureFormat::R8 ? Precision::Llvmpipe8 : Precision::Float;
+    HeightField field = LoadField(c.map, c.format);
+    ExpectIdentical(RunGlCompare(field, s, Gl()));
+}
+
+std::vector<Case> AllCases() {
+    std::vector<Case> cases;
+    for (TextureFormat format : {TextureFormat::R32F, TextureFormat::R8})
+        for (int size : {256, 512})
+            for (const char* map : {"builtin:shapes", "builtin:bumps", "builtin:steps",
+                                    "builtin:noise"})
+                for (const MethodInfo& m : Methods())
+                    cases.push_back({m.name, map, size, format});
+    return cases;
+}
+
+std::string CaseName(const testing::TestParamInfo<Case>& info) {
+    const Case& c = info.param;
+    std::string map = c.map.substr(c.map.find(':') + 1);
+    return c.method + "_" + map + "_" + std::to_string(c.size) + "_" +
+           std::string(ToString(c.format));
+}
+
+INSTANTIATE_TEST_SUITE_P(EveryKernelSceneSizeFormat, GlCompareMatrix,
+                         testing::ValuesIn(AllCases()), CaseName);
+
+TEST(GlCompare, SamplerModesParametersAndViewsAreBitIdentical) {
+    struct Variant {
+        const char* map;
+        Filter filter;
+        WrapMode wrap;
+        TextureFormat format;
+        std::vector<std::string> set;
+        float viewAngle, azimuth, tiling;
+        int width, height;
+    };
+    const std::vector<Variant> variants = {
+        {"builtin:noise", Filter::Nearest, WrapMode::Repeat, TextureFormat::R32F, {}, 45, 0, 1,
+         128, 128},
+        {"builtin:noise", Filter::Min4, WrapMode::Repeat, TextureFormat::R32F, {}, 45, 0, 1,
+         128, 128},
+        {"builtin:bumps", Filter::Bilinear, WrapMode::Clamp, TextureFormat::R32F, {}, 45, 0, 1,
+         128, 128},
+        {"builtin:steps", Filter::Bilinear, WrapMode::Repeat, TextureFormat::R32F,
+         {"early_exit=0"}, 45, 0, 1, 128, 128},
+        {"builtin:noise", Filter::Bilinear, WrapMode::Repeat, TextureFormat::R32F,
+         {"budget=7"}, 45, 0, 1, 128, 128},
+        {"builtin:noise:100", Filter::Bilinear, WrapMode::Repeat, TextureFormat::R32F, {}, 70,
+         33, 3, 160, 120},
+        {"builtin:shapes:100", Filter::Bilinear, WrapMode::Clamp, TextureFormat::R8, {}, 60,
+         120, 1, 150, 100},
+        {"builtin:bumps:100", Filter::Nearest, WrapMode::Repeat, TextureFormat::R8, {}, 30, 200,
+         2, 128, 128},
+    };
+    for (const MethodInfo& m : Methods()) {
+        for (const Variant& v : variants) {
+            SCOPED_TRACE(m.name + " on " + v.map + " filter " + std::string(ToString(v.filter)) +
+                         " wrap " + std::string(ToString(v.wrap)) + " " +
+                         std::string(ToString(v.format)) + (v.set.empty() ? "" : " " + v.set[0]));
+            RenderSettings s;
+            s.method = m.name;
+            s.set = v.set;
+            s.width = v.width;
+            s.height = v.height;
+            s.viewAngle = v.viewAngle;
+            s.azimuth = v.azimuth;
+            s.tiling = v.tiling;
+            s.sampler.filter = v.filter;
+            s.sampler.wrap = v.wrap;
+            s.sampler.precision =
+                v.format == TextureFormat::R8 ? Precision::Llvmpipe8 : Precision::Float;
+            ExpectIdentical(RunGlCompare(LoadField(v.map, v.format), s, Gl()));
+        }
+    }
+}
+
+TEST(GlCompare, DetectsASamplerMismatch) {
+    // The C++ side filters the 8-bit field in float while llvmpipe uses 8.8 fixed point: the
+    // comparison must see it (it is not vacuous).
+    HeightField field = LoadField("builtin:shapes", TextureFormat::R8);
+    RenderSettings s;
+    s.width = s.height = 128;
+    RenderOutput cpu = Render(field, s);
+    GlScene scene = MakeGlScene(s);
+    scene.format = TextureFormat::R8;
+    GlFrame gl = Gl().Render(field, scene);
+    RecordComparison c = CompareRecords(cpu.record, gl.record);
+    EXPECT_GT(c.pixels, 0u);
+    EXPECT_LT(c.hitDepth.identical, c.pixels);
+    EXPECT_GT(c.hitDepth.maxDiff, 0u);
+    EXPECT_FALSE(c.firstDiffs.empty());
+}
+
+TEST(GlCompare, JsonHasTheContractKeys) {
+    RenderOptions o;
+    o.size = "64x64";
+    ResolveRenderSettings(o);
+    HeightField field = LoadRenderMap(o);
+    GlCompareResult r = RunGlCompare(field, o.settings, Gl());
+    nlohmann::json j = GlCompareJson(r, o, field);
+    ASSERT_TRUE(j.contains("pixels"));
+    EXPECT_EQ(j["pixels"].get<uint64_t>(), r.comparison.pixels);
+    for (const char* k : {"hit_uv", "hit_depth", "iterations", "fetches"}) {
+        ASSERT_TRUE(j["identical"].contains(k)) << k;
+        EXPECT_EQ(j["identical"][k].get<double>(), 1.0) << k;
+    }
+    EXPECT_TRUE(j["lane_cost"]["equal"].get<bool>());
+}
+
+TEST(GlCompare, TraceCommandReproducesTheScene) {
+    RenderOptions o;
+    o.settings.method = "secant";
+    o.settings.set = {"refine_steps=4"};
+    o.size = "64x32";
+    o.textureFormat = "r8";
+    ResolveRenderSettings(o);
+    const std::string cmd = TraceCommand(o, 3, 4);
+    for (const char* part : {"reliefsim glcompare", "--method secant", "--set refine_steps=4",
+                             "--size 64x32", "--texture-format r8", "--trace-pixel 3,4"})
+        EXPECT_NE(cmd.find(part), std::string::npos) << part << " in " << cmd;
+}
+
+TEST(GlReference, EmbedsEveryGlslTwin) {
+    for (const char* name : {"view_ray.glsl", "sampler.glsl", "linear_search.glsl",
+                             "lane_probe.glsl", "trace_probe.glsl", "record_main.glsl"})
+        EXPECT_FALSE(EmbeddedGlsl(name).empty()) << name;
+    EXPECT_THROW(EmbeddedGlsl("nope.glsl"), Error);
+}
+
+TEST(GlReference, RejectsGpu8AndMissingDepth8) {
+    RenderSettings s;
+    s.sampler.precision = Precision::Gpu8;
+    EXPECT_THROW(MakeGlScene(s), Error);
+    s.sampler.precision = Precision::Float;
+    GlScene scene = MakeGlScene(s);
+    scene.format = TextureFormat::R8;
+    HeightField f = LoadHeightMap("builtin:flat:16", MapLoadOptions{});
+    f.depth8.clear();
+    try {
+        Gl().Prepare(f, scene);
+        ADD_FAILURE() << "expected an Error";
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find("8-bit"), std::string::npos) << e.what();
+    }
+}
+
+TEST(RecordCompare, UlpDistance) {
+    EXPECT_EQ(UlpDistance(1.0f, 1.0f), 0u);
+    EXPECT_EQ(UlpDistance(1.0f, std::nextafter(1.0f, 2.0f)), 1u);
+    EXPECT_EQ(UlpDistance(-0.0f, 0.0f), 1u);
+    EXPECT_EQ(UlpDistance(std::nextafter(0.0f, -1.0f), std::nextafter(0.0f, 1.0f)), 3u);
+}
+
+}  // namespace
+}  // namespace reliefsim
