@@ -151,8 +151,15 @@ inline bool IsLimiting(const HeightField& hf, int bx, int by, int dx, int dy) {
 }
 
 /// Listing 18-2 for one (source, offset) pair in float (GPU) arithmetic; NaN-free: returns
-/// +inf for the destinations the listing ignores (depth 0 gives a NaN ratio there).
-float RelaxedPairRatio(const HeightField& hf, int ti, int tj, int dx, int dy, int steps);
+/// +inf for the destinations the listing ignores (depth 0 gives a NaN ratio there). With a
+/// finite `best` it may return `best` instead of marching when a float bound proves the listing's
+/// ratio >= best (so min(best, result) is unchanged; exact, see the comment in the body).
+float RelaxedPairRatio(const HeightField& hf, int ti, int tj, int dx, int dy, int steps,
+                       float best = std::numeric_limits<float>::infinity());
+/// Lower bound (real numbers, with the float error of RelaxedPairRatio's bound accounted for)
+/// of that float bound over destinations at squared distance >= minS (geometry units) and
+/// depth >= dminTile < src. Valid for textures up to 2^20 texels a side.
+double RelaxedTileLowerBound(int64_t minS, double scale, float src, float dminTile);
 
 /// Conservative ratio of every texel by levels + distance transforms (exact; 8-bit or few
 /// distinct depths). Writes q per texel.

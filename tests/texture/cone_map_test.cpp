@@ -105,9 +105,13 @@ TEST(ConeMap, RelaxedFastEqualsListingBruteForce) {
         ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed, p),
                        GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p), hf.name + " relaxed");
     p.searchSteps = 128;
-    const HeightField hf = MakeBuiltinMap("steps", 32, 32);
-    ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed, p),
-                   GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p), "steps relaxed 128");
+    for (const HeightField& hf :
+         {MakeBuiltinMap("steps", 32, 32), QuantizeToUnorm8(MakeBuiltinMap("shapes", 48, 48)),
+          RandomField(40, 40, 6, false), QuantizeToUnorm8(MakeBuiltinMap("noise", 40, 40)),
+          RandomField(36, 20, 12, true)})
+        ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed, p),
+                       GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p),
+                       hf.name + " relaxed 128 " + std::to_string(hf.width));
 }
 
 /// Exact real-number check: no texel above the apex lies strictly inside the stored cone.
