@@ -211,7 +211,7 @@ void GlReference::Prepare(const HeightField& field, const GlScene& scene) {
                     "\": has no 8-bit depths; quantise it for --texture-format r8");
     if (scene.format == TextureFormat::R8 && scene.sampler.filter == Filter::Min4)
         throw Error("--filter min4 with --texture-format r8: not compared (llvmpipe's 8-bit "
-                    "AoS path has no min reduction); use r32f");
+                    "AoS path with a min reduction is not modelled); use r32f");
     if (!std::holds_alternative<LinearSearchKernel>(scene.kernel))
         throw Error("GL reference: this kernel has no GLSL twin yet");
     m.ReleaseScene();
