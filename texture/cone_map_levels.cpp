@@ -30,33 +30,60 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
     q.assign(N, kInfQ);
     std::vector<int32_t> vdist(N);
     const int L = int(levels.size());
-    for (int l = 0; l + 1 < L; ++l) {
+    // Levels from the deepest down: the sets shrink, so S_v(t) only grows from one level to
+    // the next, and a texel whose S already gives CandidateQ(S, d_t, dmin) >= q[t] can never
+    // improve again (S grows and no blocker is above dmin): it is marked done, and rows with
+    // no texel left to improve skip the level.
+    std::vector<uint8_t> done(N, 0);
+    const double dTop = double(levels[0]);
+    for (int l = L - 2; l >= 0; --l) {
         const float v = levels[size_t(l)];
         // Vertical wrap distance to the set {lev <= l}, per column; columns in blocks.
         tbb::parallel_for(tbb::blocked_range<int>(0, W, 64), [&](const tbb::blocked_range<int>& r) {
             const int i0 = r.begin(), i1 = r.end();
-            std::vector<int32_t> run(size_t(i1 - i0), kInfDist);
-            for (int pass = 0; pass < 2; ++pass)
-                for (int j = 0; j < H; ++j) {
-                    const uint16_t* lr = &lev[size_t(j) * size_t(W)];
-                    int32_t* out = &vdist[size_t(j) * size_t(W)];
-                    for (int i = i0; i < i1; ++i) {
-                        int32_t d = lr[i] <= l ? 0 : std::min(run[size_t(i - i0)] + 1, kInfDist);
-                        run[size_t(i - i0)] = d;
-                        if (pass == 1) out[i] = d;
+            const int n = i1 - i0;
+            std::vector<int32_t> run(size_t(n), kInfDist);
+            // Wrap: entering row 0 from above, the run is the distance from row H-1 up to the
+            // column's last texel of the set (a full extra sweep would give the same value);
+            // the scan stops once every column of the block has found one.
+            int found = 0;
+            for (int j = H - 1; j >= 0 && found < n; --j) {
+                const uint16_t* lr = &lev[size_t(j) * size_t(W)];
+                for (int i = i0; i < i1; ++i)
+                    if (run[size_t(i - i0)] == kInfDist && lr[i] <= l) {
+                        run[size_t(i - i0)] = H - 1 - j;
+                        ++found;
                     }
+            }
+            for (int j = 0; j < H; ++j) {
+                const uint16_t* lr = &lev[size_t(j) * size_t(W)];
+                int32_t* out = &vdist[size_t(j) * size_t(W)];
+                for (int i = i0; i < i1; ++i) {
+                    const int32_t d = lr[i] <= l ? 0 : std::min(run[size_t(i - i0)] + 1, kInfDist);
+                    run[size_t(i - i0)] = d;
+                    out[i] = d;
                 }
+            }
+            // Upward sweep; entering row H-1 from below, the distance down to the first texel.
             std::fill(run.begin(), run.end(), kInfDist);
-            for (int pass = 0; pass < 2; ++pass)
-                for (int j = H - 1; j >= 0; --j) {
-                    const uint16_t* lr = &lev[size_t(j) * size_t(W)];
-                    int32_t* out = &vdist[size_t(j) * size_t(W)];
-                    for (int i = i0; i < i1; ++i) {
-                        int32_t d = lr[i] <= l ? 0 : std::min(run[size_t(i - i0)] + 1, kInfDist);
-                        run[size_t(i - i0)] = d;
-                        if (pass == 1) out[i] = std::min(out[i], d);
+            found = 0;
+            for (int j = 0; j < H && found < n; ++j) {
+                const uint16_t* lr = &lev[size_t(j) * size_t(W)];
+                for (int i = i0; i < i1; ++i)
+                    if (run[size_t(i - i0)] == kInfDist && lr[i] <= l) {
+                        run[size_t(i - i0)] = j;
+                        ++found;
                     }
+            }
+            for (int j = H - 1; j >= 0; --j) {
+                const uint16_t* lr = &lev[size_t(j) * size_t(W)];
+                int32_t* out = &vdist[size_t(j) * size_t(W)];
+                for (int i = i0; i < i1; ++i) {
+                    const int32_t d = lr[i] <= l ? 0 : std::min(run[size_t(i - i0)] + 1, kInfDist);
+                    run[size_t(i - i0)] = d;
+                    out[i] = std::min(out[i], d);
                 }
+            }
         });
         // Row pass: lower envelope of parabolas wx*(x - p)^2 + f(p) over the wrap-extended row.
         tbb::parallel_for(tbb::blocked_range<int>(0, H, 8), [&](const tbb::blocked_range<int>& r) {
@@ -71,7 +98,7 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
             for (int j = r.begin(); j < r.end(); ++j) {
                 const size_t row = size_t(j) * size_t(W);
                 bool any = false;
-                for (int i = 0; i < W; ++i) any |= lev[row + size_t(i)] > l;
+                for (int i = 0; i < W; ++i) any |= lev[row + size_t(i)] > l && !done[row + size_t(i)];
                 if (!any) continue;
                 // When every f is finite, S(i) <= f(i) <= fMax, so parabolas further than
                 // sqrt(fMax / wx) from [0, W) never reach the envelope: shorten the wrap.
@@ -84,7 +111,9 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
                 }
                 int k = -1;
                 for (int p = -e0; p < W + e0; ++p) {
-                    const int32_t vd = vdist[row + size_t(Wrap(p, W))];
+                    // e0 <= W/2, so one adjustment wraps p (no modulo in this loop).
+                    const int pw = p < 0 ? p + W : (p >= W ? p - W : p);
+                    const int32_t vd = vdist[row + size_t(pw)];
                     if (vd >= kInfDist) continue;
                     const int64_t f = int64_t(vd) * vd * g.wy;
                     const double fp = double(f) + wx * double(p) * double(p);
@@ -111,13 +140,18 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
                     // advance while z[e+1] < i
                     while (e < last && zNum[size_t(e) + 1] < double(i) * zDen[size_t(e) + 1]) ++e;
                     const size_t t = row + size_t(i);
-                    if (lev[t] <= l) continue;
+                    if (lev[t] <= l || done[t]) continue;
                     const int64_t dx = i - vpos[size_t(e)];
                     const int64_t S = dx * dx * g.wx + fv[size_t(e)];
                     // Cheap filter with a safe margin; the exact candidate is computed only
                     // when it can win, so the minimum is the brute force's.
                     const double dd = double(hf.depth[t]) - double(v);
-                    if (!(double(S) < q[t] * (dd * dd) * (1.0 + 1e-12))) continue;
+                    if (!(double(S) < q[t] * (dd * dd) * (1.0 + 1e-12))) {
+                        // The margin makes "done" certain: S / D^2 >= q despite rounding.
+                        const double D = double(hf.depth[t]) - dTop;
+                        if (double(S) >= q[t] * (D * D) * (1.0 + 1e-12)) done[t] = 1;
+                        continue;
+                    }
                     const double c = CandidateQ(S, hf.depth[t], v);
                     if (c < q[t]) q[t] = c;
                 }
