@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "app/commands.h"
+#include "app/trace.h"
 #include "core/error.h"
 #include "metrics/heatmap.h"
 #include "raster/camera.h"
@@ -37,17 +38,6 @@ std::string Number(float f) {
     return buf;
 }
 
-/// The C++ kernel's fetches for one pixel: a sampler that logs every call.
-struct TracingSampler {
-    CountingSampler inner;
-    std::vector<glm::vec4> log;  // u, v, depth, (unused)
-    float Sample(glm::vec2 uv) {
-        float h = inner.Sample(uv);
-        log.emplace_back(uv.x, uv.y, h, 0.0f);
-        return h;
-    }
-};
-
 struct GlCompareArgs {
     RenderOptions options;
     bool json = false;
@@ -61,20 +51,13 @@ void PrintTrace(const GlCompareArgs& a, const HeightField& field, int x, int y) 
     if (x < 0 || y < 0 || x >= s.width || y >= s.height)
         throw Error("--trace-pixel " + a.tracePixel + ": outside the " + std::to_string(s.width) +
                     "x" + std::to_string(s.height) + " frame");
-    const MethodInfo& method = FindMethod(s.method);
-    Kernel kernel = MakeKernel(method, ResolveParams(method, s.set));
-    // C++ path, under the frame loop's FTZ/DAZ.
-    MarchInput in;
-    MarchResult m;
-    FetchCounts counts;
-    std::vector<glm::vec4> cpuLog;
-    {
-        detail::DenormalsAreZeroScope fp;
-        in = PixelToRay(MakeViewUniforms(s), x, y);
-        TracingSampler sampler{CountingSampler(field, s.sampler, &counts), {}};
-        m = std::visit([&](const auto& k) { return k.March(in, sampler); }, kernel);
-        cpuLog = sampler.log;
-    }
+    // C++ path: the shared per-pixel trace (same kernel, inputs and FTZ/DAZ as the frame).
+    const PixelTrace cpu = TracePixel(field, s, x, y);
+    const MarchInput& in = cpu.input;
+    const MarchResult& m = cpu.result;
+    const FetchCounts& counts = cpu.counts;
+    std::vector<glm::vec4> cpuLog;  // u, v, depth, t
+    for (const TraceFetch& f : cpu.fetches) cpuLog.emplace_back(f.uv.x, f.uv.y, f.depth, f.t);
     GlReference gl(s.threads > 0 ? s.threads : -1);
     GlScene scene = MakeGlScene(s);
     scene.measureLanes = false;

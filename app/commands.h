@@ -27,6 +27,7 @@ HeightField LoadMapFromOptions(const MapOptions& options);
 void RegisterMethodsCommand(CLI::App& root);
 void RegisterRenderCommand(CLI::App& root);
 void RegisterSummaryCommand(CLI::App& root);
+void RegisterTraceCommand(CLI::App& root);
 void RegisterMapsCommand(CLI::App& root);      // app/cmd_maps.cpp (issue #3)
 void RegisterGlCompareCommand(CLI::App& root); // app/cmd_glcompare.cpp (issue #4)
 

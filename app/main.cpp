@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
     RegisterMethodsCommand(app);
     RegisterRenderCommand(app);
     RegisterSummaryCommand(app);
+    RegisterTraceCommand(app);
 #ifdef RS_HAVE_MAPS_COMMAND
     RegisterMapsCommand(app);
 #endif

@@ -63,7 +63,8 @@ void ExpectCleanFailure(const std::string& args, const std::string& culprit) {
 
 TEST(Cli, HelpOnEveryCommand) {
     fs::path d = Scratch();
-    for (const char* cmd : {"--help", "methods --help", "render --help", "summary --help"}) {
+    for (const char* cmd : {"--help", "methods --help", "render --help", "summary --help", "trace --help",
+                            "maps --help"}) {
         Result r = RunCli(cmd, d);
         EXPECT_EQ(r.exitCode, 0) << cmd;
         EXPECT_NE(r.out.find("Usage"), std::string::npos) << cmd;
@@ -87,6 +88,20 @@ TEST(Cli, RenderWritesTheFiveOutputs) {
     for (const char* name :
          {"color.png", "iterations.png", "fetches.png", "record.exr", "metrics.json"})
         EXPECT_TRUE(fs::exists(d / "o" / name)) << name;
+}
+
+TEST(Cli, TracePrintsEveryFetchOfThePixel) {
+    fs::path d = Scratch();
+    Result r = RunCli("trace --map builtin:flat:16 --method relief --size 32x32 --view-angle 0 "
+                      "--set linear_steps=8 --set refine_steps=3 --pixel 16,16",
+                      d);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    // flat at depth 0.5: samples t = 0..4/8 (5), then 3 binary steps
+    EXPECT_NE(r.out.find("8 fetches"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("5 coarse + 3 refine"), std::string::npos) << r.out;
+    Result bad = RunCli("trace --map builtin:flat:16 --size 32x32 --pixel 40,1", d);
+    EXPECT_NE(bad.exitCode, 0);
+    EXPECT_NE(bad.err.find("--pixel"), std::string::npos);
 }
 
 TEST(Cli, MissingFile) {

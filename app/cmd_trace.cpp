@@ -1,0 +1,35 @@
+// `reliefsim trace`: one pixel's kernel, fetch by fetch (CPU only).
+#include <cstdio>
+#include <iostream>
+
+#include "app/commands.h"
+#include "app/render_options.h"
+#include "app/trace.h"
+#include "core/error.h"
+
+namespace reliefsim {
+
+void RegisterTraceCommand(CLI::App& root) {
+    struct TraceArgs {
+        RenderOptions options;
+        std::string pixel;
+    };
+    auto a = std::make_shared<TraceArgs>();
+    auto* cmd = root.add_subcommand(
+        "trace", "run one pixel's kernel of the scene `render` would draw and print every fetch "
+                 "(uv, ray depth, sampled depth) and the result");
+    AddRenderOptions(cmd, a->options);
+    cmd->add_option("--pixel", a->pixel, "pixel X,Y (row 0 at the top)")->required();
+    cmd->callback([a] {
+        ResolveRenderSettings(a->options);
+        int x = 0, y = 0;
+        char comma = 0, extra = 0;
+        if (std::sscanf(a->pixel.c_str(), "%d%c%d%c", &x, &comma, &y, &extra) != 3 ||
+            comma != ',')
+            throw Error("--pixel \"" + a->pixel + "\": expected X,Y, e.g. 10,20");
+        HeightField field = LoadRenderMap(a->options);
+        std::cout << FormatTrace(TracePixel(field, a->options.settings, x, y));
+    });
+}
+
+}  // namespace reliefsim
