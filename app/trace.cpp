@@ -62,14 +62,13 @@ std::string FormatTrace(const PixelTrace& t) {
                   t.x, t.y, double(t.input.uvEntry.x), double(t.input.uvEntry.y),
                   double(t.input.dirUv.x), double(t.input.dirUv.y));
     s += line;
-    s += "  fetch          u            v   ray depth t~  sampled depth   inside\n";
+    s += "  fetch          u            v   ray depth t~  sampled depth\n";
     for (size_t k = 0; k < t.fetches.size(); ++k) {
         const TraceFetch& f = t.fetches[k];
         // t is recovered from the uv, so it carries rounding noise: print 6 decimals.
         const double t = std::fabs(f.t) < 1e-6f ? 0.0 : double(f.t);
-        std::snprintf(line, sizeof line, "  %5zu %12.9f %12.9f %13.6f %15.9f   %s\n", k + 1,
-                      double(f.uv.x), double(f.uv.y), t, double(f.depth),
-                      f.t >= f.depth ? "yes" : "no");
+        std::snprintf(line, sizeof line, "  %5zu %12.9f %12.9f %13.6f %15.9f\n", k + 1,
+                      double(f.uv.x), double(f.uv.y), t, double(f.depth));
         s += line;
     }
     std::snprintf(line, sizeof line,
