@@ -105,6 +105,11 @@ void Run(const MapsOptions& o) {
     p.threshold = o.threshold;
     p.adaptiveLevels = o.levels;
     ValidateConeMapParams(p);
+    if (!o.out.empty() && std::filesystem::path(o.out).extension() == ".png" &&
+        *kind != ConeKind::Acm8 && ChannelCount(*kind, p) > 4)
+        throw Error("--out \"" + o.out + "\": " + std::string(ToString(*kind)) + " has " +
+                    std::to_string(ChannelCount(*kind, p)) +
+                    " channels, more than a PNG holds; use .exr");
 
     if (o.animate > 0) {
         const ConeKind k = (*kind == ConeKind::Cone || *kind == ConeKind::Quad ||
@@ -149,6 +154,8 @@ void Run(const MapsOptions& o) {
         // maxmip: max height = min depth; minmip: min height = max depth.
         const auto levels = BuildMipPyramid(hf.depth, hf.width, hf.height, 1,
                                             *kind == ConeKind::MaxMip ? MipReduce::Min : MipReduce::Max);
+        if (!o.out.empty() && !std::filesystem::path(o.out).parent_path().empty())
+            std::filesystem::create_directories(std::filesystem::path(o.out).parent_path());
         for (size_t l = 0; l < levels.size(); ++l) {
             std::printf("level %zu: %dx%d\n", l, levels[l].width, levels[l].height);
             if (o.out.empty()) continue;
@@ -184,6 +191,13 @@ void Run(const MapsOptions& o) {
     const ConeMapStats s = ComputeConeMapStats(stored, o.bins);
     PrintStats(stored, s);
     if (!o.out.empty()) {
+        // Only now, with the map in hand, create the folder: a failed run writes nothing.
+        const std::filesystem::path parent = std::filesystem::path(o.out).parent_path();
+        std::error_code ec;
+        if (!parent.empty()) std::filesystem::create_directories(parent, ec);
+        if (ec)
+            throw Error("--out \"" + o.out + "\": cannot create folder \"" + parent.string() +
+                        "\" (" + ec.message() + ")");
         WriteConeMap(o.out, m, *enc);
         WriteTextAtomic(StatsPath(o.out), ConeMapStatsJson(stored, s, *enc));
         std::printf("wrote %s and %s\n", o.out.c_str(), StatsPath(o.out).c_str());

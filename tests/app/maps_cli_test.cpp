@@ -1,0 +1,164 @@
+// `reliefsim maps`: outputs (map, stats JSON), cache, animate, and bad input (non-zero exit, one
+// stderr line naming the culprit, nothing written).
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include "texture/image_io.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Result {
+    int exitCode;
+    std::string out, err;
+};
+
+fs::path Scratch() {
+    fs::path p = fs::path(::testing::TempDir()) /
+                 ("rs_maps_cli_" + std::string(::testing::UnitTest::GetInstance()
+                                                   ->current_test_info()
+                                                   ->name()));
+    fs::remove_all(p);
+    fs::create_directories(p);
+    return p;
+}
+
+std::string Slurp(const fs::path& p) {
+    std::ifstream f(p);
+    return std::string(std::istreambuf_iterator<char>(f), {});
+}
+
+Result RunCli(const std::string& args, const fs::path& scratch) {
+    const std::string bin = std::string(RS_BINARY_DIR) + "/app/reliefsim";
+    const fs::path out = scratch / "stdout.txt", err = scratch / "stderr.txt";
+    const std::string cmd = bin + " " + args + " >" + out.string() + " 2>" + err.string();
+    const int status = std::system(cmd.c_str());
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, Slurp(out), Slurp(err)};
+}
+
+int CountLines(const std::string& s) { return int(std::count(s.begin(), s.end(), '\n')); }
+
+/// Runs `maps ARGS --out <scratch>/out/m.EXT` and expects a clean failure naming `culprit`,
+/// with neither the map, its statistics nor the output folder written.
+void ExpectCleanFailure(const std::string& args, const std::string& culprit,
+                        const std::string& ext = ".exr") {
+    const fs::path d = Scratch();
+    const fs::path outDir = d / "out";
+    const Result r = RunCli("maps " + args + " --out " + (outDir / ("m" + ext)).string(), d);
+    EXPECT_NE(r.exitCode, 0) << args;
+    EXPECT_EQ(CountLines(r.err), 1) << args << "\n" << r.err;
+    EXPECT_NE(r.err.find(culprit), std::string::npos) << args << "\n" << r.err;
+    EXPECT_FALSE(fs::exists(outDir)) << args;
+}
+
+}  // namespace
+
+TEST(MapsCli, WritesMapAndStatisticsIntoANewFolder) {
+    const fs::path d = Scratch();
+    const fs::path out = d / "new" / "acm.exr";
+    const Result r =
+        RunCli("maps --map builtin:shapes:32 --kind acm4 --encoding u8 --out " + out.string(), d);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(fs::exists(out));
+    const std::string json = Slurp(d / "new" / "acm.stats.json");
+    for (const char* key : {"\"kind\": \"acm4\"", "\"encoding\": \"u8\"", "\"histogram\"", "\"mean\""})
+        EXPECT_NE(json.find(key), std::string::npos) << key << "\n" << json;
+    EXPECT_NE(r.out.find("acm4 32x32 x4"), std::string::npos) << r.out;
+    // Not a terminal: no progress bar on stderr.
+    EXPECT_TRUE(r.err.empty()) << r.err;
+    reliefsim::MapLoadOptions lo;
+    lo.channel = reliefsim::Channel::R;
+    lo.stores = reliefsim::Stores::Depth;
+    const reliefsim::HeightField back = reliefsim::LoadHeightMapFile(out.string(), lo);
+    EXPECT_EQ(back.width, 32);
+    EXPECT_EQ(back.height, 32);
+}
+
+TEST(MapsCli, PngAndEveryKindRun) {
+    const fs::path d = Scratch();
+    for (const char* kind : {"cone", "relaxed", "relaxed-exact", "quad", "acm4", "acm8",
+                             "cone-normal", "stacked", "minmip", "maxmip"}) {
+        const std::string ext = std::string(kind) == "stacked" ? ".exr" : ".png";
+        const fs::path out = d / (std::string(kind) + ext);
+        const Result r = RunCli(std::string("maps --map builtin:bumps:16 --search-steps 16 --kind ") +
+                                    kind + " --out " + out.string(),
+                                d);
+        EXPECT_EQ(r.exitCode, 0) << kind << "\n" << r.err;
+    }
+    EXPECT_TRUE(fs::exists(d / "acm8.png"));
+    EXPECT_TRUE(fs::exists(d / "minmip_L0.png"));
+}
+
+TEST(MapsCli, CacheMissThenHit) {
+    const fs::path d = Scratch();
+    const std::string args = "maps --map builtin:shapes:32 --kind quad --cache-dir " + (d / "c").string();
+    const Result a = RunCli(args, d);
+    ASSERT_EQ(a.exitCode, 0) << a.err;
+    EXPECT_NE(a.out.find("cache: miss"), std::string::npos) << a.out;
+    const Result b = RunCli(args, d);
+    ASSERT_EQ(b.exitCode, 0) << b.err;
+    EXPECT_NE(b.out.find("cache: hit"), std::string::npos) << b.out;
+}
+
+TEST(MapsCli, AnimateReportsPerFrameTimes) {
+    const fs::path d = Scratch();
+    const Result r = RunCli("maps --map builtin:flat:64 --animate 3", d);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 4) << r.out;
+    EXPECT_NE(r.out.find("frame 2:"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("animate: 3 frames, mean"), std::string::npos) << r.out;
+}
+
+TEST(MapsCli, UnknownKind) { ExpectCleanFailure("--map builtin:shapes:16 --kind cones", "--kind \"cones\""); }
+
+TEST(MapsCli, UnknownEncoding) {
+    ExpectCleanFailure("--map builtin:shapes:16 --encoding u7", "--encoding \"u7\"");
+}
+
+TEST(MapsCli, BadOutputExtension) { ExpectCleanFailure("--map builtin:shapes:16", "m.jpg", ".jpg"); }
+
+TEST(MapsCli, TooManyChannelsForPng) {
+    ExpectCleanFailure("--map builtin:shapes:16 --kind stacked --stacked-count 6", "stacked", ".png");
+}
+
+TEST(MapsCli, SearchStepsOutOfRange) {
+    ExpectCleanFailure("--map builtin:shapes:16 --kind relaxed --search-steps 0", "--search-steps");
+}
+
+TEST(MapsCli, MissingMapFile) {
+    ExpectCleanFailure("--map /nonexistent/height.png", "height.png");
+}
+
+TEST(MapsCli, NanHeights) {
+    const fs::path d = Scratch();
+    const fs::path nan = d.parent_path() / "rs_maps_cli_nan.exr";
+    float px[4] = {0.1f, std::nanf(""), 0.3f, 0.4f};
+    reliefsim::WriteFloatImage(nan.string(), 2, 2, 1, px);
+    ExpectCleanFailure("--map " + nan.string(), "NaN");
+}
+
+TEST(MapsCli, ZeroSizeMap) {
+    const fs::path d = Scratch();
+    const fs::path zero = d.parent_path() / "rs_maps_cli_zero.tga";
+    unsigned char header[18] = {};  // uncompressed grey TGA, 0x0 pixels, 8 bits
+    header[2] = 3;
+    header[16] = 8;
+    std::ofstream(zero, std::ios::binary).write(reinterpret_cast<char*>(header), 18);
+    ExpectCleanFailure("--map " + zero.string(), "rs_maps_cli_zero.tga");
+}
+
+TEST(MapsCli, ExternalMapOfTheWrongSize) {
+    const fs::path d = Scratch();
+    const fs::path ext = d.parent_path() / "rs_maps_cli_ext16.png";
+    std::vector<uint8_t> px(16 * 16 * 4, 100);
+    reliefsim::WriteRgb8Image(ext.string(), 16, 16, 4, px.data());
+    ExpectCleanFailure("--map builtin:shapes:32 --external " + ext.string(), "rs_maps_cli_ext16.png");
+}
