@@ -9,8 +9,10 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iostream>
 
 #include "core/error.h"
+#include "texture/image_io.h"
 #include "texture/map_cache.h"
 #include "texture/mip_pyramid.h"
 #include "texture/procedural.h"
@@ -341,6 +343,71 @@ TEST(ConeMap, ExternalGpuGemsMapLoadsAndChecksSize) {
     EXPECT_GT(s.meanRatio, 0.0);
     EXPECT_LE(s.maxRatio, 1.0);
     EXPECT_THROW(LoadExternalConeMap(path, ConeKind::Cone, 2, 128, 128), Error);
+#endif
+}
+
+/// Statistical comparison with the conservative cone map that the GPU Gems 3 chapter's own GPU
+/// preprocessor made for tile1 (../shared/data/README.md: an independent, approximate
+/// reference; compare, explain, never tune). Ours: exact, stored as u8 like theirs (B channel).
+/// Expected, per that README: texels at depth 0 hold 0 there (the definition gives an unbounded
+/// cone, 1 after clamping); elsewhere their ratios are smaller than the exact ones (about 0.8x on
+/// flat regions, much smaller on slopes) and never wider beyond 8-bit rounding.
+TEST(ConeMap, GpuGemsTile1ConeMapStatistics) {
+#ifndef RS_SHARED_DATA
+    GTEST_SKIP() << "RS_SHARED_DATA not defined";
+#else
+    const std::string dir = std::string(RS_SHARED_DATA) + "/gpugems3-ch18/";
+    if (!std::filesystem::exists(dir + "tile1.tga") || !std::filesystem::exists(dir + "tile1_cone.tga"))
+        GTEST_SKIP() << dir << " absent";
+    MapLoadOptions lo;
+    lo.channel = Channel::A;
+    lo.stores = Stores::Depth;  // A = depth, 0 = top
+    const HeightField hf = LoadHeightMapFile(dir + "tile1.tga", lo);
+    ASSERT_EQ(hf.width, 256);
+    const ConeMap ours = QuantizeConeMap(GenerateConeMap(hf, ConeKind::Cone), ConeEncoding::U8);
+    const ConeMap gg = LoadExternalConeMap(dir + "tile1_cone.tga", ConeKind::Cone, 2, 256, 256);
+    const int W = hf.width, H = hf.height;
+    int64_t nTop = 0, nTopZero = 0, nOther = 0, nWider = 0;
+    double sumOurs = 0, sumGg = 0;
+    std::vector<double> flat, slope;  // gg / ours, split by the local 3x3 depth range
+    for (int j = 0; j < H; ++j)
+        for (int i = 0; i < W; ++i) {
+            const float d = hf.At(i, j), o = ours.At(i, j), g = gg.At(i, j);
+            if (d == 0.0f) {
+                ++nTop;
+                nTopZero += g == 0.0f;
+                EXPECT_EQ(o, 1.0f);
+                continue;
+            }
+            ++nOther;
+            sumOurs += double(o);
+            sumGg += double(g);
+            if (g > o + 1.5f / 255.0f) ++nWider;
+            float range = 0;
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx)
+                    range = std::max(range, std::abs(hf.At((i + dx + W) % W, (j + dy + H) % H) - d));
+            if (o > 0.0f) (range <= 2.0f / 255.0f ? flat : slope).push_back(double(g) / double(o));
+        }
+    auto median = [](std::vector<double> v) {
+        std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(v.size() / 2), v.end());
+        return v[v.size() / 2];
+    };
+    ASSERT_GT(nTop, 0);
+    ASSERT_FALSE(flat.empty());
+    ASSERT_FALSE(slope.empty());
+    const double medFlat = median(flat), medSlope = median(slope);
+    std::cout << "tile1: " << nTop << " texels at depth 0 (" << nTopZero << " hold 0 in GPU Gems 3), "
+              << nOther << " others: mean ratio ours " << sumOurs / double(nOther) << ", GPU Gems 3 "
+              << sumGg / double(nOther) << "; median GG3/ours flat " << medFlat << " (" << flat.size()
+              << "), slopes " << medSlope << " (" << slope.size() << "); wider than exact: " << nWider
+              << "\n";
+    EXPECT_EQ(nTopZero, nTop);               // their depth-0 convention
+    EXPECT_LE(nWider, nOther / 1000);        // essentially never wider than the exact cone
+    EXPECT_LT(sumGg, sumOurs);               // narrower on average
+    EXPECT_GT(medFlat, 0.7);                 // README: about 0.8x on flat regions
+    EXPECT_LT(medFlat, 0.9);
+    EXPECT_LT(medSlope, medFlat);            // and much narrower on slopes
 #endif
 }
 
