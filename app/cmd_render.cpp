@@ -42,7 +42,7 @@ void RegisterRenderCommand(CLI::App& root) {
         "render", "render the textured plane with one method; write color.png, iterations.png, "
                   "fetches.png, record.exr and metrics.json into --out");
     AddRenderOptions(cmd, a->options);
-    cmd->add_option("--out", a->out, "output directory (created; files replaced)")->required();
+    cmd->add_option("--out", a->out, "output directory (created with its parents; the five files replaced)")->required();
     cmd->add_flag("--quiet", a->quiet, "print nothing on success");
     cmd->callback([a] { RunRender(*a); });
 }

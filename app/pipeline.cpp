@@ -288,17 +288,22 @@ void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
     std::error_code ec;
     if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
         throw Error("--out \"" + outDir + "\": exists and is not a directory");
-    fs::path parent = dir.has_parent_path() ? dir.parent_path() : fs::path(".");
-    if (dir.filename().empty()) parent = dir.parent_path().parent_path();
-    if (!fs::is_directory(parent, ec))
-        throw Error("--out \"" + outDir + "\": parent directory \"" + parent.string() +
-                    "\" does not exist");
-    std::string tmpl = (parent / (".reliefsim-staging-XXXXXX")).string();
+    // Missing parents are created only once every file is complete; until then the files
+    // live in a staging directory inside the nearest existing ancestor (same filesystem, so
+    // the final rename is atomic).
+    dir = fs::absolute(dir, ec).lexically_normal();
+    if (dir.filename().empty()) dir = dir.parent_path();
+    fs::path ancestor = dir.parent_path();
+    while (!ancestor.empty() && !fs::exists(ancestor, ec) && ancestor != ancestor.root_path())
+        ancestor = ancestor.parent_path();
+    if (!fs::is_directory(ancestor, ec))
+        throw Error("--out \"" + outDir + "\": \"" + ancestor.string() + "\" is not a directory");
+    std::string tmpl = (ancestor / (".reliefsim-staging-XXXXXX")).string();
     std::vector<char> buf(tmpl.begin(), tmpl.end());
     buf.push_back('\0');
     if (!mkdtemp(buf.data()))
         throw Error("--out \"" + outDir + "\": cannot create a staging directory in \"" +
-                    parent.string() + "\"");
+                    ancestor.string() + "\"");
     fs::path staging(buf.data());
     const std::vector<std::string> names = {"color.png", "iterations.png", "fetches.png",
                                             "record.exr", "metrics.json"};
@@ -334,6 +339,7 @@ void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
                               flags.data(), err.data()});
         WriteText(staging / "metrics.json", MetricsJson(out, s, field).dump(2) + "\n");
         if (!fs::exists(dir)) {
+            fs::create_directories(dir.parent_path());
             fs::rename(staging, dir);
         } else {
             for (const auto& name : names) fs::rename(staging / name, dir / name);

@@ -152,3 +152,24 @@ TEST(Trace, MatchesTheFrameRecordAtEveryProbedPixel) {
     }
     EXPECT_THROW(TracePixel(f, Small("relief"), 150, 0), Error);
 }
+
+TEST(Render, OutputCreatesMissingParentsOnlyOnSuccess) {
+    fs::path base = fs::path(::testing::TempDir()) / "rs_render_parents";
+    fs::remove_all(base);
+    fs::create_directories(base);
+    HeightField f = MakeBuiltinMap("builtin:flat:8");
+    RenderSettings s = Small("linear");
+    s.width = s.height = 16;
+    RenderOutput out = Render(f, s);
+    WriteRenderOutputs((base / "a" / "b" / "c").string(), out, s, f);
+    EXPECT_TRUE(fs::exists(base / "a" / "b" / "c" / "metrics.json"));
+    // an ancestor that is a file: an error, and nothing created beside it
+    std::ofstream(base / "file") << "x";
+    EXPECT_THROW(WriteRenderOutputs((base / "file" / "d").string(), out, s, f), Error);
+    int entries = 0;
+    for (const auto& e : fs::directory_iterator(base)) {
+        (void)e;
+        ++entries;
+    }
+    EXPECT_EQ(entries, 2);  // "a" and "file"
+}
