@@ -111,8 +111,14 @@ float RelaxedPairRatio(const HeightField& hf, int ti, int tj, int dx, int dy, in
             pz += stz;
             if (pz >= src) return 1.0f;
             if (prune) {
-                const float cx = px - sx, cy = py - sy;
-                if (std::sqrt(cx * cx + cy * cy) / (src - pz) >= best) return best;
+                // fl(sqrt(cx^2 + cy^2) / (src - pz)) >= best, tested without sqrt or division:
+                // in double the squares, the sum and (src - pz)^2 are exact or within 2^-50,
+                // and the 2^-20 factor exceeds the float rounding of that quotient (< 2^-22),
+                // so this implies the float bound >= best.
+                const double cx = double(px - sx), cy = double(py - sy);
+                const double den = double(src - pz);
+                if (cx * cx + cy * cy >= double(best) * double(best) * den * den * (1.0 + 0x1p-20))
+                    return best;
             }
         } else {
             break;  // the listing keeps sampling the same point from here on: same result
