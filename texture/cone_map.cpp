@@ -184,6 +184,9 @@ TiledOffsets MakeTiledOffsets(const Geometry& g, ConeKind sectors) {
     TiledOffsets to;
     const int nx = (2 * g.halfX + 1 + kTile - 1) / kTile;
     const int ny = (2 * g.halfY + 1 + kTile - 1) / kTile;
+    // Sized once: growing by push_back re-copied the (multi-MB) offset list several times.
+    to.offsets.reserve(size_t(2 * g.halfX + 1) * size_t(2 * g.halfY + 1));
+    to.tiles.reserve(size_t(nx) * size_t(ny));
     for (int ty = 0; ty < ny; ++ty)
         for (int tx = 0; tx < nx; ++tx) {
             OffsetTile t;
