@@ -61,6 +61,8 @@ void ForEachRow(int H, F&& f) {
 }
 
 bool UseLevels(const HeightField& hf) {
+    // The levels path stores vertical distances in 16 bits.
+    if (hf.height >= 0xFFFF || hf.width >= 0xFFFF) return false;
     if (!hf.depth8.empty()) return true;
     std::vector<float> v(hf.depth);
     std::sort(v.begin(), v.end());

@@ -13,7 +13,9 @@
 namespace reliefsim::detail {
 
 namespace {
-constexpr int32_t kInfDist = 1 << 29;
+/// Vertical distances are stored in 16 bits (less memory traffic per level); the levels path
+/// is used only for sizes below kInfDist (UseLevels).
+constexpr int32_t kInfDist = 0xFFFF;
 constexpr int64_t kInfS = int64_t(1) << 62;
 }  // namespace
 
@@ -28,7 +30,7 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
         lev[t] = uint16_t(std::lower_bound(levels.begin(), levels.end(), hf.depth[t]) -
                           levels.begin());
     q.assign(N, kInfQ);
-    std::vector<int32_t> vdist(N);
+    std::vector<uint16_t> vdist(N);
     const int L = int(levels.size());
     // Levels from the deepest down: the sets shrink, so S_v(t) only grows from one level to
     // the next, and a texel whose S already gives CandidateQ(S, d_t, dmin) >= q[t] can never
@@ -57,11 +59,11 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
             }
             for (int j = 0; j < H; ++j) {
                 const uint16_t* lr = &lev[size_t(j) * size_t(W)];
-                int32_t* out = &vdist[size_t(j) * size_t(W)];
+                uint16_t* out = &vdist[size_t(j) * size_t(W)];
                 for (int i = i0; i < i1; ++i) {
                     const int32_t d = lr[i] <= l ? 0 : std::min(run[size_t(i - i0)] + 1, kInfDist);
                     run[size_t(i - i0)] = d;
-                    out[i] = d;
+                    out[i] = uint16_t(d);
                 }
             }
             // Upward sweep; entering row H-1 from below, the distance down to the first texel.
@@ -77,11 +79,11 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
             }
             for (int j = H - 1; j >= 0; --j) {
                 const uint16_t* lr = &lev[size_t(j) * size_t(W)];
-                int32_t* out = &vdist[size_t(j) * size_t(W)];
+                uint16_t* out = &vdist[size_t(j) * size_t(W)];
                 for (int i = i0; i < i1; ++i) {
                     const int32_t d = lr[i] <= l ? 0 : std::min(run[size_t(i - i0)] + 1, kInfDist);
                     run[size_t(i - i0)] = d;
-                    out[i] = std::min(out[i], d);
+                    out[i] = uint16_t(std::min(int32_t(out[i]), d));
                 }
             }
         });
@@ -94,16 +96,19 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
             // under 2^53, so the envelope is built without rounding (no ties misresolved).
             std::vector<double> zNum(size_t(n) + 2), zDen(size_t(n) + 2);
             std::vector<int64_t> fv(size_t(n) + 1);
+            std::vector<double> fpv(size_t(n) + 1);  // f + wx p^2 of each envelope parabola
             const double wx = double(g.wx);
             for (int j = r.begin(); j < r.end(); ++j) {
                 const size_t row = size_t(j) * size_t(W);
                 bool any = false;
-                for (int i = 0; i < W; ++i) any |= lev[row + size_t(i)] > l && !done[row + size_t(i)];
-                if (!any) continue;
                 // When every f is finite, S(i) <= f(i) <= fMax, so parabolas further than
                 // sqrt(fMax / wx) from [0, W) never reach the envelope: shorten the wrap.
                 int32_t vMax = 0;
-                for (int i = 0; i < W; ++i) vMax = std::max(vMax, vdist[row + size_t(i)]);
+                for (int i = 0; i < W; ++i) {
+                    any |= lev[row + size_t(i)] > l && !done[row + size_t(i)];
+                    vMax = std::max(vMax, int32_t(vdist[row + size_t(i)]));
+                }
+                if (!any) continue;
                 int e0 = ext;
                 if (vMax < kInfDist) {
                     const double reach = std::sqrt(double(vMax) * double(vMax) * double(g.wy) / wx);
@@ -120,7 +125,7 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
                     double num = 0, den = 1;
                     while (k >= 0) {
                         const int vq = vpos[size_t(k)];
-                        const double fq = double(fv[size_t(k)]) + wx * double(vq) * double(vq);
+                        const double fq = fpv[size_t(k)];
                         num = fp - fq;
                         den = 2.0 * wx * double(p - vq);
                         // pop while s <= z[k] (z[0] = -inf)
@@ -130,6 +135,7 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
                     ++k;
                     vpos[size_t(k)] = p;
                     fv[size_t(k)] = f;
+                    fpv[size_t(k)] = fp;
                     zNum[size_t(k)] = num;
                     zDen[size_t(k)] = den;
                 }
