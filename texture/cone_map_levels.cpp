@@ -46,17 +46,19 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
             const int n = i1 - i0;
             std::vector<int32_t> run(size_t(n), kInfDist);
             // Wrap: entering row 0 from above, the run is the distance from row H-1 up to the
-            // column's last texel of the set (a full extra sweep would give the same value);
-            // the scan stops once every column of the block has found one.
-            int found = 0;
-            for (int j = H - 1; j >= 0 && found < n; --j) {
-                const uint16_t* lr = &lev[size_t(j) * size_t(W)];
-                for (int i = i0; i < i1; ++i)
-                    if (run[size_t(i - i0)] == kInfDist && lr[i] <= l) {
-                        run[size_t(i - i0)] = H - 1 - j;
-                        ++found;
-                    }
+            // column's last texel of the set; entering row H-1 from below (upward sweep), the
+            // distance down to its first texel. One branch-free pass finds both.
+            std::vector<int32_t> first(size_t(n), H), last(size_t(n), -1);
+            for (int j = 0; j < H; ++j) {
+                const uint16_t* lr = &lev[size_t(j) * size_t(W)] + i0;
+                for (int i = 0; i < n; ++i) {
+                    const bool in = lr[i] <= l;
+                    last[size_t(i)] = in ? j : last[size_t(i)];
+                    first[size_t(i)] = (in && first[size_t(i)] == H) ? j : first[size_t(i)];
+                }
             }
+            for (int i = 0; i < n; ++i)
+                run[size_t(i)] = last[size_t(i)] < 0 ? kInfDist : H - 1 - last[size_t(i)];
             for (int j = 0; j < H; ++j) {
                 const uint16_t* lr = &lev[size_t(j) * size_t(W)];
                 uint16_t* out = &vdist[size_t(j) * size_t(W)];
@@ -66,17 +68,9 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
                     out[i] = uint16_t(d);
                 }
             }
-            // Upward sweep; entering row H-1 from below, the distance down to the first texel.
-            std::fill(run.begin(), run.end(), kInfDist);
-            found = 0;
-            for (int j = 0; j < H && found < n; ++j) {
-                const uint16_t* lr = &lev[size_t(j) * size_t(W)];
-                for (int i = i0; i < i1; ++i)
-                    if (run[size_t(i - i0)] == kInfDist && lr[i] <= l) {
-                        run[size_t(i - i0)] = j;
-                        ++found;
-                    }
-            }
+            // Upward sweep.
+            for (int i = 0; i < n; ++i)
+                run[size_t(i)] = first[size_t(i)] >= H ? kInfDist : first[size_t(i)];
             for (int j = H - 1; j >= 0; --j) {
                 const uint16_t* lr = &lev[size_t(j) * size_t(W)];
                 uint16_t* out = &vdist[size_t(j) * size_t(W)];
