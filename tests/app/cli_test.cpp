@@ -1,51 +1,24 @@
 // The command line: help, methods, and bad input (one error line, non-zero exit, no output).
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
-
 #include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 
+#include "tests/app/cli_util.h"
 #include "texture/image_io.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct Result {
-    int exitCode;
-    std::string out, err;
-};
+using reliefsim::testing::CountLines;
+using reliefsim::testing::RunCli;
+using Result = reliefsim::testing::CliResult;
 
-fs::path Scratch() {
-    fs::path p = fs::path(::testing::TempDir()) /
-                 ("rs_cli_" + std::string(::testing::UnitTest::GetInstance()
-                                              ->current_test_info()
-                                              ->name()));
-    fs::remove_all(p);
-    fs::create_directories(p);
-    return p;
-}
-
-std::string Slurp(const fs::path& p) {
-    std::ifstream f(p);
-    return std::string(std::istreambuf_iterator<char>(f), {});
-}
-
-Result RunCli(const std::string& args, const fs::path& scratch) {
-    const std::string bin = std::string(RS_BINARY_DIR) + "/app/reliefsim";
-    const fs::path out = scratch / "stdout.txt", err = scratch / "stderr.txt";
-    std::string cmd = bin + " " + args + " >" + out.string() + " 2>" + err.string();
-    int status = std::system(cmd.c_str());
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, Slurp(out), Slurp(err)};
-}
-
-int CountLines(const std::string& s) {
-    return int(std::count(s.begin(), s.end(), '\n'));
-}
+fs::path Scratch() { return reliefsim::testing::Scratch("rs_cli_"); }
 
 void ExpectCleanFailure(const std::string& args, const std::string& culprit) {
     fs::path d = Scratch();

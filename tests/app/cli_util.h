@@ -1,0 +1,48 @@
+// Helpers for tests that run the reliefsim binary: a scratch folder per test, the command's
+// exit code and its captured stdout and stderr.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+namespace reliefsim::testing {
+
+struct CliResult {
+    int exitCode;
+    std::string out, err;
+};
+
+/// An empty folder named after the running test, under the GoogleTest temp dir.
+inline std::filesystem::path Scratch(const std::string& prefix) {
+    namespace fs = std::filesystem;
+    fs::path p = fs::path(::testing::TempDir()) /
+                 (prefix + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(p);
+    fs::create_directories(p);
+    return p;
+}
+
+inline std::string Slurp(const std::filesystem::path& p) {
+    std::ifstream f(p);
+    return std::string(std::istreambuf_iterator<char>(f), {});
+}
+
+/// Runs `reliefsim ARGS`, capturing stdout and stderr in files under scratch.
+inline CliResult RunCli(const std::string& args, const std::filesystem::path& scratch) {
+    const std::string bin = std::string(RS_BINARY_DIR) + "/app/reliefsim";
+    const auto out = scratch / "stdout.txt", err = scratch / "stderr.txt";
+    const std::string cmd = bin + " " + args + " >" + out.string() + " 2>" + err.string();
+    const int status = std::system(cmd.c_str());
+    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, Slurp(out), Slurp(err)};
+}
+
+inline int CountLines(const std::string& s) { return int(std::count(s.begin(), s.end(), '\n')); }
+
+}  // namespace reliefsim::testing
