@@ -1,10 +1,21 @@
 // `reliefsim methods`: the catalogue with parameters, defaults and ranges.
+#include <cstdio>
 #include <iostream>
+#include <string>
 
 #include "app/commands.h"
 #include "kernels/registry.h"
 
 namespace reliefsim {
+
+namespace {
+// Parameter values as a person writes them: 1000000, not 1e+06.
+std::string Number(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.10g", v);
+    return buf;
+}
+}  // namespace
 
 void RegisterMethodsCommand(CLI::App& root) {
     auto* cmd = root.add_subcommand("methods", "list the methods, their parameters, defaults and ranges");
@@ -23,8 +34,8 @@ void RegisterMethodsCommand(CLI::App& root) {
                 std::cout << "\n";
             }
             for (const ParamDef& p : m.params)
-                std::cout << "    --set " << p.name << "=" << p.defaultValue << "  ["
-                          << p.minValue << ", " << p.maxValue << "]"
+                std::cout << "    --set " << p.name << "=" << Number(p.defaultValue) << "  ["
+                          << Number(p.minValue) << ", " << Number(p.maxValue) << "]"
                           << (p.integer ? " integer" : "") << "  " << p.help << "\n";
             std::cout << "\n";
         }

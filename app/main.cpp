@@ -23,8 +23,14 @@ int main(int argc, char** argv) {
 #endif
     try {
         app.parse(argc, argv);
-    } catch (const CLI::ParseError& e) {
+    } catch (const CLI::CallForHelp& e) {
         return app.exit(e);
+    } catch (const CLI::CallForAllHelp& e) {
+        return app.exit(e);
+    } catch (const CLI::ParseError& e) {
+        // One line, like every other error (CLI11's own report takes two).
+        std::fprintf(stderr, "reliefsim: error: %s; run with --help for usage\n", e.what());
+        return 2;
     } catch (const Error& e) {
         std::fprintf(stderr, "reliefsim: error: %s\n", e.what());
         return 1;

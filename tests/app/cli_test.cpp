@@ -77,6 +77,14 @@ TEST(Cli, TracePrintsEveryFetchOfThePixel) {
     EXPECT_NE(bad.err.find("--pixel"), std::string::npos);
 }
 
+TEST(Cli, ParseErrorsAreOneLine) {
+    ExpectCleanFailure("render --map builtin:shapes:32 --bogus", "--bogus");
+    ExpectCleanFailure("render --map builtin:shapes:32 --view-angle abc", "--view-angle");
+    Result r = RunCli("", Scratch());
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_EQ(CountLines(r.err), 1) << r.err;
+}
+
 TEST(Cli, MissingFile) {
     ExpectCleanFailure("render --map /nonexistent/height.png --method relief", "height.png");
 }
