@@ -99,6 +99,19 @@ TEST(ConeMap, NonSquareAndOddSizesMatchBruteForce) {
     }
 }
 
+TEST(ConeMap, LevelsPathOnWideRowsMatchesPlainSearch) {
+    // Rows of several 64-texel segments (the levels path builds the row envelope only around
+    // segments with texels left to improve): equal to the exact plain search, which the
+    // brute-force tests cover. Non-square sizes exercise the weighted geometry and wrap.
+    for (auto [w, h] : {std::pair{512, 40}, std::pair{300, 64}, std::pair{256, 256}}) {
+        for (const HeightField& hf : {QuantizeToUnorm8(MakeBuiltinMap("shapes", w, h)),
+                                      QuantizeToUnorm8(RandomField(w, h, 13, true))})
+            ExpectBitEqual(GenerateConeMap(hf, ConeKind::Cone),
+                           GenerateSectorMapPlainSearch(hf, ConeKind::Cone),
+                           hf.name + " " + std::to_string(w) + "x" + std::to_string(h));
+    }
+}
+
 TEST(ConeMap, RelaxedFastEqualsListingBruteForce) {
     ConeMapParams p;
     p.searchSteps = 32;
