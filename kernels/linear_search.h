@@ -138,6 +138,17 @@ private:
         return t;
     }
 
+    // Replaces the bracket end on the same side of the surface as the sample (t, h).
+    static void Narrow(float t, float h, float& t1, float& h1, float& t2, float& h2) {
+        if (t >= h) {
+            t2 = t;
+            h2 = h;
+        } else {
+            t1 = t;
+            h1 = h;
+        }
+    }
+
     // Alg. 3 with a bracket-preserving update; returns the last intersection point.
     template <HeightSampler S>
     float Interval(const MarchInput& in, S& heights, float t1, float h1, float t2, float h2,
@@ -147,14 +158,7 @@ private:
             tInt = SecantPoint(t1, h1, t2, h2);
             if (!budget.Take()) break;
             ++r.nRefine;
-            float h = heights.Sample(At(in, tInt));
-            if (tInt >= h) {
-                t2 = tInt;
-                h2 = h;
-            } else {
-                t1 = tInt;
-                h1 = h;
-            }
+            Narrow(tInt, heights.Sample(At(in, tInt)), t1, h1, t2, h2);
         }
         return tInt;
     }
@@ -173,13 +177,7 @@ private:
             ++r.nRefine;
             float h = heights.Sample(At(in, tInt));
             if (converged) continue;
-            if (tInt >= h) {
-                t2 = tInt;
-                h2 = h;
-            } else {
-                t1 = tInt;
-                h1 = h;
-            }
+            Narrow(tInt, h, t1, h1, t2, h2);
             best = h;
             converged = std::fabs(h - tInt) <= params.secantTolerance;
         }
