@@ -180,10 +180,13 @@ ConeMap SearchMap(const HeightField& hf, ConeKind kind, const ConeMapParams& p, 
         UseLevels(hf)) {
         std::vector<double> q;
         ConservativeQByLevels(hf, g, q);
-        for (size_t t = 0; t < q.size(); ++t)
-            m.values[t] = kind == ConeKind::ConeNormal
-                              ? ConeNormalFromRatio(std::sqrt(q[t]) / g.scale)
-                              : RatioFromQ(q[t], g.scale);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, q.size(), size_t(1) << 14),
+                          [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t t = r.begin(); t < r.end(); ++t)
+                m.values[t] = kind == ConeKind::ConeNormal
+                                  ? ConeNormalFromRatio(std::sqrt(q[t]) / g.scale)
+                                  : RatioFromQ(q[t], g.scale);
+        });
         return m;
     }
 

@@ -3,9 +3,11 @@
 // S_v(t) / (d_t - v)^2, S_v the exact squared distance to the nearest texel with depth <= v.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include "texture/cone_map_detail.h"
@@ -17,18 +19,48 @@ namespace {
 /// is used only for sizes below kInfDist (UseLevels).
 constexpr int32_t kInfDist = 0xFFFF;
 constexpr int64_t kInfS = int64_t(1) << 62;
+/// Columns per block of the vertical pass.
+constexpr int kColBlock = 32;
 }  // namespace
 
 void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector<double>& q) {
     const int W = hf.width, H = hf.height;
     const size_t N = size_t(W) * size_t(H);
-    std::vector<float> levels(hf.depth);
-    std::sort(levels.begin(), levels.end());
-    levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+    // Distinct depths, ascending. This path sees at most a few hundred (UseLevels), so a
+    // small sorted table with a last-value cache replaces sorting all N depths (that and the
+    // level lookup below were ~30 ms of serial work at 1024²); many distinct values fall
+    // back to the sort. Either way the table holds exactly the distinct depths.
+    std::vector<float> levels;
+    {
+        float last = std::numeric_limits<float>::quiet_NaN();
+        for (size_t t = 0; t < N && levels.size() <= 4096; ++t) {
+            const float d = hf.depth[t];
+            if (d == last) continue;
+            last = d;
+            const auto it = std::lower_bound(levels.begin(), levels.end(), d);
+            if (it == levels.end() || *it != d) levels.insert(it, d);
+        }
+        if (levels.size() > 4096) {
+            levels = hf.depth;
+            std::sort(levels.begin(), levels.end());
+            levels.erase(std::unique(levels.begin(), levels.end()), levels.end());
+        }
+    }
     std::vector<uint16_t> lev(N);
-    for (size_t t = 0; t < N; ++t)
-        lev[t] = uint16_t(std::lower_bound(levels.begin(), levels.end(), hf.depth[t]) -
-                          levels.begin());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, N, size_t(1) << 14),
+                      [&](const tbb::blocked_range<size_t>& r) {
+        float last = std::numeric_limits<float>::quiet_NaN();
+        uint16_t lastLev = 0;
+        for (size_t t = r.begin(); t < r.end(); ++t) {
+            const float d = hf.depth[t];
+            if (!(d == last)) {
+                last = d;
+                lastLev = uint16_t(std::lower_bound(levels.begin(), levels.end(), d) -
+                                   levels.begin());
+            }
+            lev[t] = lastLev;
+        }
+    });
     q.assign(N, kInfQ);
     std::vector<uint16_t> vdist(N);
     const int L = int(levels.size());
@@ -38,59 +70,93 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
     // no texel left to improve skip the level.
     std::vector<uint8_t> done(N, 0);
     const double dTop = double(levels[0]);
+    // Row-pass buffers, one set per worker thread for all levels: allocating (and zeroing)
+    // them per task and level zeroed ~2 GB at 1024².
+    struct RowBuffers {
+        std::vector<int> vpos;
+        std::vector<double> zNum, zDen, fpv;
+        std::vector<int64_t> fv;
+    };
+    const size_t nExt = size_t(W) + 2 * size_t(g.halfX);
+    tbb::enumerable_thread_specific<RowBuffers> rowBuffers([nExt] {
+        RowBuffers b;
+        b.vpos.resize(nExt + 1);
+        b.zNum.resize(nExt + 2);
+        b.zDen.resize(nExt + 2);
+        b.fpv.resize(nExt + 1);
+        b.fv.resize(nExt + 1);
+        return b;
+    });
+    // Column blocks of kColBlock: hasLevel[l * nCB + b] says whether block b holds a texel at
+    // level l. Going from level l + 1 to l, the set {lev <= l} loses exactly the texels at
+    // level l + 1, so in a block without such a texel every column's set, and hence its
+    // vertical distances, are those of the previous level: the block is skipped.
+    const int nCB = (W + kColBlock - 1) / kColBlock;
+    std::vector<uint8_t> hasLevel(size_t(L) * size_t(nCB), 0);
+    for (size_t t = 0; t < N; ++t)
+        hasLevel[size_t(lev[t]) * size_t(nCB) + (t % size_t(W)) / size_t(kColBlock)] = 1;
     for (int l = L - 2; l >= 0; --l) {
         const float v = levels[size_t(l)];
         // Vertical wrap distance to the set {lev <= l}, per column; columns in blocks.
-        tbb::parallel_for(tbb::blocked_range<int>(0, W, 64), [&](const tbb::blocked_range<int>& r) {
-            const int i0 = r.begin(), i1 = r.end();
-            const int n = i1 - i0;
-            std::vector<int32_t> run(size_t(n), kInfDist);
-            // Wrap: entering row 0 from above, the run is the distance from row H-1 up to the
-            // column's last texel of the set; entering row H-1 from below (upward sweep), the
-            // distance down to its first texel. One branch-free pass finds both.
-            std::vector<int32_t> first(size_t(n), H), last(size_t(n), -1);
-            for (int j = 0; j < H; ++j) {
-                const uint16_t* lr = &lev[size_t(j) * size_t(W)] + i0;
-                for (int i = 0; i < n; ++i) {
-                    const bool in = lr[i] <= l;
-                    last[size_t(i)] = in ? j : last[size_t(i)];
-                    first[size_t(i)] = (in && first[size_t(i)] == H) ? j : first[size_t(i)];
+        tbb::parallel_for(tbb::blocked_range<int>(0, nCB, 1),
+                          [&](const tbb::blocked_range<int>& rb) {
+            for (int cb = rb.begin(); cb < rb.end(); ++cb) {
+                if (l < L - 2 && !hasLevel[size_t(l + 1) * size_t(nCB) + size_t(cb)]) continue;
+                const int i0 = cb * kColBlock, i1 = std::min(W, i0 + kColBlock);
+                const int n = i1 - i0;
+                std::vector<int32_t> run(size_t(n), kInfDist);
+                // Wrap: entering row 0 from above, the run is the distance from row H-1 up to the
+                // column's last texel of the set; entering row H-1 from below (upward sweep), the
+                // distance down to its first texel. One branch-free pass finds both.
+                std::vector<int32_t> first(size_t(n), H), last(size_t(n), -1);
+                for (int j = 0; j < H; ++j) {
+                    const uint16_t* lr = &lev[size_t(j) * size_t(W)] + i0;
+                    for (int i = 0; i < n; ++i) {
+                        const bool in = lr[i] <= l;
+                        last[size_t(i)] = in ? j : last[size_t(i)];
+                        first[size_t(i)] = (in && first[size_t(i)] == H) ? j : first[size_t(i)];
+                    }
                 }
-            }
-            for (int i = 0; i < n; ++i)
-                run[size_t(i)] = last[size_t(i)] < 0 ? kInfDist : H - 1 - last[size_t(i)];
-            for (int j = 0; j < H; ++j) {
-                const uint16_t* lr = &lev[size_t(j) * size_t(W)];
-                uint16_t* out = &vdist[size_t(j) * size_t(W)];
-                for (int i = i0; i < i1; ++i) {
-                    const int32_t d = lr[i] <= l ? 0 : std::min(run[size_t(i - i0)] + 1, kInfDist);
-                    run[size_t(i - i0)] = d;
-                    out[i] = uint16_t(d);
+                for (int i = 0; i < n; ++i)
+                    run[size_t(i)] = last[size_t(i)] < 0 ? kInfDist : H - 1 - last[size_t(i)];
+                for (int j = 0; j < H; ++j) {
+                    const uint16_t* lr = &lev[size_t(j) * size_t(W)];
+                    uint16_t* out = &vdist[size_t(j) * size_t(W)];
+                    for (int i = i0; i < i1; ++i) {
+                        const int32_t d =
+                            lr[i] <= l ? 0 : std::min(run[size_t(i - i0)] + 1, kInfDist);
+                        run[size_t(i - i0)] = d;
+                        out[i] = uint16_t(d);
+                    }
                 }
-            }
-            // Upward sweep.
-            for (int i = 0; i < n; ++i)
-                run[size_t(i)] = first[size_t(i)] >= H ? kInfDist : first[size_t(i)];
-            for (int j = H - 1; j >= 0; --j) {
-                const uint16_t* lr = &lev[size_t(j) * size_t(W)];
-                uint16_t* out = &vdist[size_t(j) * size_t(W)];
-                for (int i = i0; i < i1; ++i) {
-                    const int32_t d = lr[i] <= l ? 0 : std::min(run[size_t(i - i0)] + 1, kInfDist);
-                    run[size_t(i - i0)] = d;
-                    out[i] = uint16_t(std::min(int32_t(out[i]), d));
+                // Upward sweep.
+                for (int i = 0; i < n; ++i)
+                    run[size_t(i)] = first[size_t(i)] >= H ? kInfDist : first[size_t(i)];
+                for (int j = H - 1; j >= 0; --j) {
+                    const uint16_t* lr = &lev[size_t(j) * size_t(W)];
+                    uint16_t* out = &vdist[size_t(j) * size_t(W)];
+                    for (int i = i0; i < i1; ++i) {
+                        const int32_t d =
+                            lr[i] <= l ? 0 : std::min(run[size_t(i - i0)] + 1, kInfDist);
+                        run[size_t(i - i0)] = d;
+                        out[i] = uint16_t(std::min(int32_t(out[i]), d));
+                    }
                 }
             }
         });
         // Row pass: lower envelope of parabolas wx*(x - p)^2 + f(p) over the wrap-extended row.
         tbb::parallel_for(tbb::blocked_range<int>(0, H, 8), [&](const tbb::blocked_range<int>& r) {
             const int ext = g.halfX;
-            const int n = W + 2 * ext;
-            std::vector<int> vpos(size_t(n) + 1);
+            RowBuffers& buf = rowBuffers.local();
+            std::vector<int>& vpos = buf.vpos;
             // Breakpoints as exact fractions zNum / zDen (zDen > 0): every product below stays
             // under 2^53, so the envelope is built without rounding (no ties misresolved).
-            std::vector<double> zNum(size_t(n) + 2), zDen(size_t(n) + 2);
-            std::vector<int64_t> fv(size_t(n) + 1);
-            std::vector<double> fpv(size_t(n) + 1);  // f + wx p^2 of each envelope parabola
+            // Entries are written before they are read (index <= k), so reuse across rows,
+            // levels and tasks is safe.
+            std::vector<double>& zNum = buf.zNum;
+            std::vector<double>& zDen = buf.zDen;
+            std::vector<int64_t>& fv = buf.fv;
+            std::vector<double>& fpv = buf.fpv;  // f + wx p^2 of each envelope parabola
             const double wx = double(g.wx);
             for (int j = r.begin(); j < r.end(); ++j) {
                 const size_t row = size_t(j) * size_t(W);
