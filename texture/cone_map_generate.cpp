@@ -20,7 +20,7 @@ namespace {
 /// Nearest-texel index of a float texel coordinate f = u * n, wrapped: the listing's point
 /// sampling with repeat. Same result as fmod on the float (exact) for every f; the integer path
 /// is only taken where the conversion cannot overflow.
-inline int WrapFloorIndex(float f, int n) {
+RS_INLINE int WrapFloorIndex(float f, int n) {
     const float fi = std::floor(f);
     if (std::abs(fi) < 1073741824.0f) {
         const int k = int(fi);
@@ -32,7 +32,7 @@ inline int WrapFloorIndex(float f, int n) {
     return Wrap(int(std::fmod(double(fi), double(n))), n);
 }
 
-float NearestWrap(const HeightField& hf, float u, float v) {
+RS_INLINE float NearestWrap(const HeightField& hf, float u, float v) {
     const int i = WrapFloorIndex(u * float(hf.width), hf.width);
     const int j = WrapFloorIndex(v * float(hf.height), hf.height);
     return hf.depth[size_t(j) * size_t(hf.width) + size_t(i)];
