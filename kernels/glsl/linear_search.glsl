@@ -62,6 +62,18 @@ float SecantPoint(float t1, float h1, float t2, float h2) {
     return r;
 }
 
+// Replaces the bracket end on the same side of the surface as the sample (t, h)
+// (LinearSearchKernel::Narrow); moves values only, no arithmetic.
+void Narrow(float t, float h, inout float t1, inout float h1, inout float t2, inout float h2) {
+    if (t >= h) {
+        t2 = t;
+        h2 = h;
+    } else {
+        t1 = t;
+        h1 = h;
+    }
+}
+
 MarchResult March(MarchInput ray) {
     precise float stepSize = 1.0 / float(uLinearSteps);
     precise float t = 0.0, tAbove = 0.0, hAbove = 0.0, tBelow = 0.0, hBelow = 0.0;
@@ -136,21 +148,9 @@ MarchResult March(MarchInput ray) {
                 s = s * 0.5;
                 tb = tb >= h ? tb - s : tb + s;
             } else if (uRefinement == kRefineInterval) {
-                if (tInt >= h) {
-                    t2 = tInt;
-                    h2 = h;
-                } else {
-                    t1 = tInt;
-                    h1 = h;
-                }
+                Narrow(tInt, h, t1, h1, t2, h2);
             } else if (!converged) {  // kRefineSecant
-                if (tInt >= h) {
-                    t2 = tInt;
-                    h2 = h;
-                } else {
-                    t1 = tInt;
-                    h1 = h;
-                }
+                Narrow(tInt, h, t1, h1, t2, h2);
                 best = h;
                 converged = abs(h - tInt) <= uSecantTolerance;
             }
