@@ -109,7 +109,7 @@ struct LinearSearchKernel {
     static float SecantPoint(float t1, float h1, float t2, float h2) {
         float denom = (t2 - t1) - (h2 - h1);
         float f = denom > 0.0f ? (h1 - t1) / denom : 1.0f;
-        f = std::fmin(std::fmax(f, 0.0f), 1.0f);
+        f = f < 0.0f ? 0.0f : (f > 1.0f ? 1.0f : f);  // f is finite here; no libm call
         return f * (t2 - t1) + t1;
     }
 

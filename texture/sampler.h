@@ -53,6 +53,12 @@ struct FetchCounts {
 
 namespace detail {
 
+/// min/max as SSE minss/maxss compute them (a < b ? a : b: the second operand when either is
+/// NaN), which is what llvmpipe's generated code does; unlike std::fmin these never become a
+/// libm call in the hot path.
+RS_INLINE float MinSse(float a, float b) { return a < b ? a : b; }
+RS_INLINE float MaxSse(float a, float b) { return a > b ? a : b; }
+
 /// Float to int as x86 cvttss2si does it: truncation, INT_MIN when out of range or NaN
 /// (a plain cast would be undefined behaviour there).
 RS_INLINE int TruncToInt(float f) {
@@ -71,9 +77,9 @@ RS_INLINE LinearAxis WrapLinear(float u, int n, WrapMode wrap) {
     LinearAxis a;
     if (wrap == WrapMode::Clamp) {
         float c = u * fn;
-        c = std::fmin(c, fn);
+        c = MinSse(c, fn);
         c = c - 0.5f;
-        c = std::fmax(c, 0.0f);
+        c = MaxSse(c, 0.0f);
         float fl = std::floor(c);
         a.i0 = TruncToInt(fl);
         a.w = c - fl;
@@ -153,7 +159,7 @@ RS_INLINE int WrapNearest(float u, int n, WrapMode wrap) {
         return i < 0 ? 0 : (i > n - 1 ? n - 1 : i);
     }
     if (IsPowerOfTwo(n)) return TruncToInt(std::floor(u * fn)) & (n - 1);
-    float f = std::fmin(u - std::floor(u), 0x1.fffffep-1f);
+    float f = MinSse(u - std::floor(u), 0x1.fffffep-1f);
     int i = TruncToInt(f * fn);
     return i < 0 ? 0 : (i > n - 1 ? n - 1 : i);  // only reachable for NaN input
 }
@@ -228,9 +234,9 @@ public:
         detail::LinearAxis t = detail::WrapLinear(uv.y, field_->height, state_.wrap);
         float t00 = Texel(s.i0, t.i0), t10 = Texel(s.i1, t.i0);
         float t01 = Texel(s.i0, t.i1), t11 = Texel(s.i1, t.i1);
-        float r0 = s.w != 0.0f ? std::fmin(t00, t10) : t00;
-        float r1 = s.w != 0.0f ? std::fmin(t01, t11) : t01;
-        return t.w != 0.0f ? std::fmin(r0, r1) : r0;
+        float r0 = s.w != 0.0f ? detail::MinSse(t00, t10) : t00;
+        float r1 = s.w != 0.0f ? detail::MinSse(t01, t11) : t01;
+        return t.w != 0.0f ? detail::MinSse(r0, r1) : r0;
     }
 
     /// One fetch, 1 texel read; out-of-range indices wrap or clamp per the state.
