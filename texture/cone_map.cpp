@@ -121,9 +121,7 @@ Geometry MakeGeometry(int w, int h) {
     return g;
 }
 
-float RatioFromQ(double q, double scale) {
-    if (!(q < kInfQ)) return kConeRatioCap;
-    const double r = std::sqrt(q) / scale;
+float RoundDownStrict(double r) {
     if (!(r < double(kConeRatioCap))) return kConeRatioCap;
     float f = float(r);
     // Round down, then one more ulp when the float sits within double rounding of the value:
@@ -131,6 +129,11 @@ float RatioFromQ(double q, double scale) {
     if (double(f) > r) f = std::nextafter(f, 0.0f);
     if (double(f) >= r * (1.0 - 1e-14) && f > 0.0f) f = std::nextafter(f, 0.0f);
     return f;
+}
+
+float RatioFromQ(double q, double scale) {
+    if (!(q < kInfQ)) return kConeRatioCap;
+    return RoundDownStrict(std::sqrt(q) / scale);
 }
 
 int SectorCount(ConeKind kind) {

@@ -36,8 +36,10 @@ inline double CandidateQ(int64_t s, float apex, float blocker) {
     return double(s) / (dd * dd);
 }
 
-/// Ratio from the minimal q: sqrt(q)/scale, rounded to a float strictly not above the exact
-/// value (one ulp down when the double result sits on or next to a float). Capped.
+/// Rounds a ratio (>= 0) to a float strictly below it (unless exactly zero), capped at
+/// kConeRatioCap: the stored ratio never exceeds the exact one.
+float RoundDownStrict(double r);
+/// Ratio from the minimal q: RoundDownStrict(sqrt(q)/scale); the cap for no blocker.
 float RatioFromQ(double q, double scale);
 
 /// A texel offset with its exact squared distance and sector mask.

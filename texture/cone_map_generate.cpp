@@ -38,15 +38,6 @@ RS_INLINE float NearestWrap(const HeightField& hf, float u, float v) {
     return hf.depth[size_t(j) * size_t(hf.width) + size_t(i)];
 }
 
-/// Round a double value (>= 0) down to a float strictly below it unless exact zero.
-float RoundDownStrict(double r) {
-    if (!(r < double(kConeRatioCap))) return kConeRatioCap;
-    float f = float(r);
-    if (double(f) > r) f = std::nextafter(f, 0.0f);
-    if (double(f) >= r * (1.0 - 1e-14) && f > 0.0f) f = std::nextafter(f, 0.0f);
-    return f;
-}
-
 /// n_z of the cone side normal from a ratio r: r / sqrt(1 + r^2); 1 for an unbounded cone.
 float ConeNormalFromRatio(double r) {
     if (!(r < double(kConeRatioCap))) return 1.0f;
