@@ -77,14 +77,15 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
         std::vector<double> zNum, zDen, fpv;
         std::vector<int64_t> fv;
     };
-    const size_t nExt = size_t(W) + 2 * size_t(g.halfX);
-    tbb::enumerable_thread_specific<RowBuffers> rowBuffers([nExt] {
+    // The envelope holds at most W + 1 parabolas (positions 0..W of the cut row, see below).
+    const size_t nPos = size_t(W) + 2;
+    tbb::enumerable_thread_specific<RowBuffers> rowBuffers([nPos] {
         RowBuffers b;
-        b.vpos.resize(nExt + 1);
-        b.zNum.resize(nExt + 2);
-        b.zDen.resize(nExt + 2);
-        b.fpv.resize(nExt + 1);
-        b.fv.resize(nExt + 1);
+        b.vpos.resize(nPos);
+        b.zNum.resize(nPos);
+        b.zDen.resize(nPos);
+        b.fpv.resize(nPos);
+        b.fv.resize(nPos);
         return b;
     });
     // Column blocks of kColBlock: hasLevel[l * nCB + b] says whether block b holds a texel at
@@ -95,6 +96,14 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
     std::vector<uint8_t> hasLevel(size_t(L) * size_t(nCB), 0);
     for (size_t t = 0; t < N; ++t)
         hasLevel[size_t(lev[t]) * size_t(nCB) + (t % size_t(W)) / size_t(kColBlock)] = 1;
+    // Open texels per row (lev > l and not done): a row gains the texels of level l + 1 when
+    // level l starts and loses the texels marked done; rows without one skip the level.
+    std::vector<int32_t> levelCount(size_t(L) * size_t(H), 0), nOpen(size_t(H), 0);
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, 16), [&](const tbb::blocked_range<int>& r) {
+        for (int j = r.begin(); j < r.end(); ++j)
+            for (int i = 0; i < W; ++i)
+                ++levelCount[size_t(lev[size_t(j) * size_t(W) + size_t(i)]) * size_t(H) + size_t(j)];
+    });
     for (int l = L - 2; l >= 0; --l) {
         const float v = levels[size_t(l)];
         // Vertical wrap distance to the set {lev <= l}, per column; columns in blocks.
@@ -144,41 +153,40 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
                 }
             }
         });
-        // Row pass: lower envelope of parabolas wx*(x - p)^2 + f(p) over the wrap-extended row.
+        // Row pass: S(i) = min over columns p of wx * dx(i, p)^2 + f(p), f = wy * vdist^2, dx the
+        // wrap distance, by the lower envelope of the parabolas. The wrap needs no extended row:
+        // the row is cut at a column c of minimal f and unrolled to positions x = 0..W (texel
+        // c + x mod W; x = W is c again). For a query x and a column p, either the linear
+        // distance |x - p| is the wrap distance (the term is there), or the shorter way round
+        // passes the cut, so the query is at least as close to x = 0 or x = W, whose f is
+        // minimal: that term is no larger. Linear distances are never below wrap distances, so
+        // the linear envelope gives exactly the wrapped S (about half the parabolas of the
+        // former extension by up to W/2 on both sides).
         tbb::parallel_for(tbb::blocked_range<int>(0, H, 8), [&](const tbb::blocked_range<int>& r) {
-            const int ext = g.halfX;
             RowBuffers& buf = rowBuffers.local();
             std::vector<int>& vpos = buf.vpos;
-            // Breakpoints as exact fractions zNum / zDen (zDen > 0): every product below stays
-            // under 2^53, so the envelope is built without rounding (no ties misresolved).
-            // Entries are written before they are read (index <= k), so reuse across rows,
-            // levels and tasks is safe.
+            // Breakpoints as exact fractions zNum / zDen (zDen > 0): positions are in [0, W],
+            // so every product below stays under 2^53 and the envelope is built without
+            // rounding (no ties misresolved). Entries are written before they are read
+            // (index <= k), so reuse across rows, levels and tasks is safe.
             std::vector<double>& zNum = buf.zNum;
             std::vector<double>& zDen = buf.zDen;
             std::vector<int64_t>& fv = buf.fv;
             std::vector<double>& fpv = buf.fpv;  // f + wx p^2 of each envelope parabola
             const double wx = double(g.wx);
             for (int j = r.begin(); j < r.end(); ++j) {
+                nOpen[size_t(j)] += levelCount[size_t(l + 1) * size_t(H) + size_t(j)];
+                if (nOpen[size_t(j)] == 0) continue;
                 const size_t row = size_t(j) * size_t(W);
-                bool any = false;
-                // When every f is finite, S(i) <= f(i) <= fMax, so parabolas further than
-                // sqrt(fMax / wx) from [0, W) never reach the envelope: shorten the wrap.
-                int32_t vMax = 0;
-                for (int i = 0; i < W; ++i) {
-                    any |= lev[row + size_t(i)] > l && !done[row + size_t(i)];
-                    vMax = std::max(vMax, int32_t(vdist[row + size_t(i)]));
-                }
-                if (!any) continue;
-                int e0 = ext;
-                if (vMax < kInfDist) {
-                    const double reach = std::sqrt(double(vMax) * double(vMax) * double(g.wy) / wx);
-                    e0 = std::min(ext, int(std::ceil(reach)) + 1);
-                }
+                const uint16_t* vr = &vdist[row];
+                uint16_t vMin = 0xFFFF;
+                for (int i = 0; i < W; ++i) vMin = std::min(vMin, vr[i]);
+                if (vMin >= kInfDist) continue;  // no texel of the set in any column
+                int c = 0;
+                while (vr[c] != vMin) ++c;
                 int k = -1;
-                for (int p = -e0; p < W + e0; ++p) {
-                    // e0 <= W/2, so one adjustment wraps p (no modulo in this loop).
-                    const int pw = p < 0 ? p + W : (p >= W ? p - W : p);
-                    const int32_t vd = vdist[row + size_t(pw)];
+                for (int p = 0; p <= W; ++p) {
+                    const int32_t vd = vr[c + p < W ? c + p : c + p - W];
                     if (vd >= kInfDist) continue;
                     const int64_t f = int64_t(vd) * vd * g.wy;
                     const double fp = double(f) + wx * double(p) * double(p);
@@ -199,15 +207,15 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
                     zNum[size_t(k)] = num;
                     zDen[size_t(k)] = den;
                 }
-                if (k < 0) continue;
                 const int last = k;
                 int e = 0;
-                for (int i = 0; i < W; ++i) {
-                    // advance while z[e+1] < i
-                    while (e < last && zNum[size_t(e) + 1] < double(i) * zDen[size_t(e) + 1]) ++e;
-                    const size_t t = row + size_t(i);
+                int nDone = 0;
+                for (int x = 0; x < W; ++x) {
+                    // advance while z[e+1] < x
+                    while (e < last && zNum[size_t(e) + 1] < double(x) * zDen[size_t(e) + 1]) ++e;
+                    const size_t t = row + size_t(c + x < W ? c + x : c + x - W);
                     if (lev[t] <= l || done[t]) continue;
-                    const int64_t dx = i - vpos[size_t(e)];
+                    const int64_t dx = x - vpos[size_t(e)];
                     const int64_t S = dx * dx * g.wx + fv[size_t(e)];
                     // Cheap filter with a safe margin; the exact candidate is computed only
                     // when it can win, so the minimum is the brute force's.
@@ -215,12 +223,16 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
                     if (!(double(S) < q[t] * (dd * dd) * (1.0 + 1e-12))) {
                         // The margin makes "done" certain: S / D^2 >= q despite rounding.
                         const double D = double(hf.depth[t]) - dTop;
-                        if (double(S) >= q[t] * (D * D) * (1.0 + 1e-12)) done[t] = 1;
+                        if (double(S) >= q[t] * (D * D) * (1.0 + 1e-12)) {
+                            done[t] = 1;
+                            ++nDone;
+                        }
                         continue;
                     }
-                    const double c = CandidateQ(S, hf.depth[t], v);
-                    if (c < q[t]) q[t] = c;
+                    const double cq = CandidateQ(S, hf.depth[t], v);
+                    if (cq < q[t]) q[t] = cq;
                 }
+                nOpen[size_t(j)] -= nDone;
             }
         });
     }
