@@ -165,10 +165,13 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
         tbb::parallel_for(tbb::blocked_range<int>(0, H, 8), [&](const tbb::blocked_range<int>& r) {
             RowBuffers& buf = rowBuffers.local();
             std::vector<int>& vpos = buf.vpos;
-            // Breakpoints as exact fractions zNum / zDen (zDen > 0): positions are in [0, W],
-            // so every product below stays under 2^53 and the envelope is built without
-            // rounding (no ties misresolved). Entries are written before they are read
-            // (index <= k), so reuse across rows, levels and tasks is safe.
+            // Breakpoints as exact fractions zNum / zDen (zDen > 0). Positions are in [0, W], so
+            // every product below is at most 2 wx W (wx W^2 + wy H^2 / 4): 2.5 W^3 < 2^53 for
+            // square maps (the former extended row reached 1.5 W, about 2x more), and the
+            // envelope is built without rounding (no ties misresolved). Large coprime W and H
+            // make wx, wy large and can exceed 2^53 (as before).
+            // Entries are written before they are read (index <= k), so reuse across rows,
+            // levels and tasks is safe.
             std::vector<double>& zNum = buf.zNum;
             std::vector<double>& zDen = buf.zDen;
             std::vector<int64_t>& fv = buf.fv;
@@ -184,54 +187,64 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
                 if (vMin >= kInfDist) continue;  // no texel of the set in any column
                 int c = 0;
                 while (vr[c] != vMin) ++c;
+                // Position x is texel x + c (x < W - c) or x + c - W; one loop per part.
                 int k = -1;
-                for (int p = 0; p <= W; ++p) {
-                    const int32_t vd = vr[c + p < W ? c + p : c + p - W];
-                    if (vd >= kInfDist) continue;
-                    const int64_t f = int64_t(vd) * vd * g.wy;
-                    const double fp = double(f) + wx * double(p) * double(p);
-                    double num = 0, den = 1;
-                    while (k >= 0) {
-                        const int vq = vpos[size_t(k)];
-                        const double fq = fpv[size_t(k)];
-                        num = fp - fq;
-                        den = 2.0 * wx * double(p - vq);
-                        // pop while s <= z[k] (z[0] = -inf)
-                        if (k > 0 && num * zDen[size_t(k)] <= zNum[size_t(k)] * den) --k;
-                        else break;
+                auto push = [&](int p0, int p1, int off) {
+                    for (int p = p0; p < p1; ++p) {
+                        const int32_t vd = vr[p + off];
+                        if (vd >= kInfDist) continue;
+                        const int64_t f = int64_t(vd) * vd * g.wy;
+                        const double fp = double(f) + wx * double(p) * double(p);
+                        double num = 0, den = 1;
+                        while (k >= 0) {
+                            const int vq = vpos[size_t(k)];
+                            const double fq = fpv[size_t(k)];
+                            num = fp - fq;
+                            den = 2.0 * wx * double(p - vq);
+                            // pop while s <= z[k] (z[0] = -inf)
+                            if (k > 0 && num * zDen[size_t(k)] <= zNum[size_t(k)] * den) --k;
+                            else break;
+                        }
+                        ++k;
+                        vpos[size_t(k)] = p;
+                        fv[size_t(k)] = f;
+                        fpv[size_t(k)] = fp;
+                        zNum[size_t(k)] = num;
+                        zDen[size_t(k)] = den;
                     }
-                    ++k;
-                    vpos[size_t(k)] = p;
-                    fv[size_t(k)] = f;
-                    fpv[size_t(k)] = fp;
-                    zNum[size_t(k)] = num;
-                    zDen[size_t(k)] = den;
-                }
+                };
+                push(0, W - c, c);
+                push(W - c, W + 1, c - W);
                 const int last = k;
                 int e = 0;
                 int nDone = 0;
-                for (int x = 0; x < W; ++x) {
-                    // advance while z[e+1] < x
-                    while (e < last && zNum[size_t(e) + 1] < double(x) * zDen[size_t(e) + 1]) ++e;
-                    const size_t t = row + size_t(c + x < W ? c + x : c + x - W);
-                    if (lev[t] <= l || done[t]) continue;
-                    const int64_t dx = x - vpos[size_t(e)];
-                    const int64_t S = dx * dx * g.wx + fv[size_t(e)];
-                    // Cheap filter with a safe margin; the exact candidate is computed only
-                    // when it can win, so the minimum is the brute force's.
-                    const double dd = double(hf.depth[t]) - double(v);
-                    if (!(double(S) < q[t] * (dd * dd) * (1.0 + 1e-12))) {
-                        // The margin makes "done" certain: S / D^2 >= q despite rounding.
-                        const double D = double(hf.depth[t]) - dTop;
-                        if (double(S) >= q[t] * (D * D) * (1.0 + 1e-12)) {
-                            done[t] = 1;
-                            ++nDone;
+                auto query = [&](int x0, int x1, int off) {
+                    for (int x = x0; x < x1; ++x) {
+                        // advance while z[e+1] < x
+                        while (e < last && zNum[size_t(e) + 1] < double(x) * zDen[size_t(e) + 1]) ++e;
+                        const size_t t = row + size_t(x + off);
+                        if (lev[t] <= l || done[t]) continue;
+                        const int64_t dx = x - vpos[size_t(e)];
+                        const int64_t S = dx * dx * g.wx + fv[size_t(e)];
+                        // Cheap filter with a safe margin; the exact candidate is computed only
+                        // when it can win, so the minimum is the brute force's.
+                        const double d = double(hf.depth[t]);
+                        const double dd = d - double(v);
+                        if (!(double(S) < q[t] * (dd * dd) * (1.0 + 1e-12))) {
+                            // The margin makes "done" certain: S / D^2 >= q despite rounding.
+                            const double D = d - dTop;
+                            if (double(S) >= q[t] * (D * D) * (1.0 + 1e-12)) {
+                                done[t] = 1;
+                                ++nDone;
+                            }
+                            continue;
                         }
-                        continue;
+                        const double cq = CandidateQ(S, hf.depth[t], v);
+                        if (cq < q[t]) q[t] = cq;
                     }
-                    const double cq = CandidateQ(S, hf.depth[t], v);
-                    if (cq < q[t]) q[t] = cq;
-                }
+                };
+                query(0, W - c, c);
+                query(W - c, W, c - W);
                 nOpen[size_t(j)] -= nDone;
             }
         });
