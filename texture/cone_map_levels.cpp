@@ -167,7 +167,7 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
             std::vector<int>& vpos = buf.vpos;
             // Breakpoints as exact fractions zNum / zDen (zDen > 0). Positions are in [0, W], so
             // every product below is at most 2 wx W (wx W^2 + wy H^2 / 4): 2.5 W^3 < 2^53 for
-            // square maps (the former extended row reached 1.5 W, about 2x more), and the
+            // square maps (the former extended row reached 1.5 W: 10 W^3), and the
             // envelope is built without rounding (no ties misresolved). Large coprime W and H
             // make wx, wy large and can exceed 2^53 (as before).
             // Entries are written before they are read (index <= k), so reuse across rows,
