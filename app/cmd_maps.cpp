@@ -100,11 +100,14 @@ void Run(const MapsOptions& o) {
     ConeMapParams p;
     p.searchSteps = o.searchSteps;
     p.stackedCount = o.stackedCount;
-    p.relaxedNormal = o.relaxed;
+    p.relaxed = o.relaxed;
     p.adaptive = o.adaptive;
     p.threshold = o.threshold;
     p.adaptiveLevels = o.levels;
     ValidateConeMapParams(p);
+    if (o.relaxed && *kind != ConeKind::ConeNormal && *kind != ConeKind::Stacked)
+        throw Error("--relaxed: applies to --kind cone-normal and stacked only (for plain relaxed "
+                    "cones use --kind relaxed)");
     if (!o.out.empty() && std::filesystem::path(o.out).extension() == ".png" &&
         *kind != ConeKind::Acm8 && ChannelCount(*kind, p) > 4)
         throw Error("--out \"" + o.out + "\": " + std::string(ToString(*kind)) + " has " +
@@ -228,7 +231,8 @@ void RegisterMapsCommand(CLI::App& root) {
         ->capture_default_str();
     cmd->add_option("--stacked-count", o->stackedCount, "stacked: number of cones")
         ->capture_default_str();
-    cmd->add_flag("--relaxed", o->relaxed, "cone-normal: from the relaxed (Listing) ratio");
+    cmd->add_flag("--relaxed", o->relaxed,
+                  "cone-normal, stacked: relaxed cones (Listing 18-2) instead of conservative");
     cmd->add_flag("--safety", o->safety, "3x3-minimum bilinear safety pass (Ban et al.)");
     cmd->add_option("--out", o->out, "output: .exr (float, one channel per ratio) or .png (8-bit)");
     cmd->add_option("--cache-dir", o->cacheDir, "disk cache of generated maps (content-hash keys)");

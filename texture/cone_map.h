@@ -55,7 +55,7 @@ constexpr float kConeRatioCap = 1024.0f;
 struct ConeMapParams {
     int searchSteps = 128;     ///< Relaxed: Listing 18-2 search steps, in [1, 4096]
     int stackedCount = 4;      ///< Stacked: number of cones K, in [1, 16]
-    bool relaxedNormal = false;///< ConeNormal: from the relaxed (Listing) ratio instead of conservative
+    bool relaxed = false;      ///< ConeNormal/Stacked: relaxed (Listing 18-2) cones instead of conservative
     bool adaptive = false;     ///< Quad/Acm4/Acm8/Cone: 000 Algorithm 1 (never wider than exact)
     float threshold = 0.25f;   ///< adaptive: copy the parent's ratio when its depth range <= this
     int adaptiveLevels = 3;    ///< adaptive: levels of hierarchy above the finest, in [0, 12]

@@ -157,11 +157,26 @@ inline bool IsLimiting(const HeightField& hf, int bx, int by, int dx, int dy) {
 /// finite `best` it may return `best` instead of marching when a float bound proves the listing's
 /// ratio >= best (so min(best, result) is unchanged; exact, see the comment in the body).
 float RelaxedPairRatio(const HeightField& hf, int ti, int tj, int dx, int dy, int steps,
-                       float best = std::numeric_limits<float>::infinity());
+                       float apex, float best = std::numeric_limits<float>::infinity());
 /// Lower bound (real numbers, with the float error of RelaxedPairRatio's bound accounted for)
 /// of that float bound over destinations at squared distance >= minS (geometry units) and
 /// depth >= dminTile < src. Valid for textures up to 2^20 texels a side.
 double RelaxedTileLowerBound(int64_t minS, double scale, float src, float dminTile);
+
+/// Listing 18-1/18-2 relaxed map (texture/cone_map_relaxed.cpp): outKind Relaxed (ratios),
+/// ConeNormal (n_z of the ratio) or Stacked (p.stackedCount channels, apex StackedApex).
+/// brute = every pair, no pruning (the oracle); otherwise the exact pruned search.
+ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool brute,
+                          ConeKind outKind);
+
+/// Apex depth of stacked cone k of K: d * (K - k) / K (k = 0: the surface point).
+inline float StackedApex(float d, int k, int K) { return d * (float(K - k) / float(K)); }
+
+/// n_z of the cone side normal from a ratio r: r / sqrt(1 + r^2); 1 for an unbounded cone.
+inline float ConeNormalFromRatio(double r) {
+    if (!(r < double(kConeRatioCap))) return 1.0f;
+    return RoundDownStrict(r / std::sqrt(1.0 + r * r));
+}
 
 /// Conservative ratio of every texel by levels + distance transforms (exact; 8-bit or few
 /// distinct depths). Writes q per texel.

@@ -3,6 +3,7 @@ target_sources(rs_texture PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/cone_map.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cone_map_levels.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cone_map_generate.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/cone_map_relaxed.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cone_map_adaptive.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cone_map_io.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mip_pyramid.cpp

@@ -43,7 +43,7 @@ uint64_t ConeMapCacheKey(const HeightField& hf, ConeKind kind, const ConeMapPara
     h = HashValue(h, int(kind));
     h = HashValue(h, p.searchSteps);
     h = HashValue(h, p.stackedCount);
-    h = HashValue(h, int(p.relaxedNormal));
+    h = HashValue(h, int(p.relaxed));
     h = HashValue(h, int(p.adaptive));
     h = HashValue(h, p.threshold);
     h = HashValue(h, p.adaptiveLevels);

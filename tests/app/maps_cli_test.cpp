@@ -73,6 +73,30 @@ TEST(MapsCli, PngAndEveryKindRun) {
     EXPECT_TRUE(fs::exists(d / "minmip_L0.png"));
 }
 
+TEST(MapsCli, RelaxedStackedAndConeNormal) {
+    // --relaxed switches stacked and cone-normal to the Listing's relaxed cones: the stacked
+    // map's first channel is then the relaxed map.
+    const fs::path d = Scratch();
+    const std::string base = "maps --map builtin:shapes:24 --search-steps 32 ";
+    ASSERT_EQ(RunCli(base + "--kind relaxed --out " + (d / "r.exr").string(), d).exitCode, 0);
+    const Result st = RunCli(base + "--kind stacked --stacked-count 3 --relaxed --out " +
+                                 (d / "s.exr").string(), d);
+    ASSERT_EQ(st.exitCode, 0) << st.err;
+    EXPECT_NE(st.out.find("stacked 24x24 x3"), std::string::npos) << st.out;
+    reliefsim::MapLoadOptions lo;
+    lo.channel = reliefsim::Channel::R;
+    lo.stores = reliefsim::Stores::Depth;
+    const reliefsim::HeightField r = reliefsim::LoadHeightMapFile((d / "r.exr").string(), lo);
+    const reliefsim::HeightField s0 = reliefsim::LoadHeightMapFile((d / "s.exr").string(), lo);
+    EXPECT_EQ(r.depth, s0.depth);
+    const Result cn = RunCli(base + "--kind cone-normal --relaxed --out " + (d / "n.exr").string(), d);
+    EXPECT_EQ(cn.exitCode, 0) << cn.err;
+}
+
+TEST(MapsCli, RelaxedFlagOnAnotherKind) {
+    ExpectCleanFailure("--map builtin:shapes:16 --kind acm4 --relaxed", "--relaxed");
+}
+
 TEST(MapsCli, CacheMissThenHit) {
     const fs::path d = Scratch();
     const std::string args = "maps --map builtin:shapes:32 --kind quad --cache-dir " + (d / "c").string();

@@ -129,6 +129,112 @@ TEST(ConeMap, RelaxedFastEqualsListingBruteForce) {
                        hf.name + " relaxed 128 " + std::to_string(hf.width));
 }
 
+/// A plateau at depth 0.5 with a few deeper and higher texels: most nearest deeper cells lie
+/// beyond the exit field's search window, whose edge then bounds the march.
+HeightField PlateauField(int n) {
+    HeightField hf;
+    hf.width = hf.height = n;
+    hf.name = "plateau";
+    hf.depth.assign(size_t(n) * size_t(n), 0.5f);
+    hf.depth[size_t(3 * n + 5)] = 1.0f;
+    hf.depth[size_t((n - 2) * n + n / 2)] = 0.9f;
+    hf.depth[size_t((n / 2) * n + n / 3)] = 0.1f;
+    hf.depth[size_t((n / 3) * n + n - 1)] = 0.2f;
+    return hf;
+}
+
+TEST(ConeMap, RelaxedVariantsMatchTheirBruteForce) {
+    // Every path of the pruned relaxed search against the listing evaluated for every pair:
+    // steps not a power of two (divisions), 1 step (no loop), 4096 steps, the window edge of
+    // the exit field (plateau), zero depths (the listing's NaN), stacked and cone-normal output.
+    ConeMapParams p;
+    for (int steps : {37, 1, 4096}) {
+        p.searchSteps = steps;
+        const HeightField hf = steps == 4096 ? QuantizeToUnorm8(MakeBuiltinMap("shapes", 16, 16))
+                                             : QuantizeToUnorm8(MakeBuiltinMap("noise", 24, 24));
+        ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed, p),
+                       GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p),
+                       "relaxed steps " + std::to_string(steps));
+    }
+    p.searchSteps = 128;
+    HeightField zeros = RandomField(28, 28, 21, false);
+    for (size_t t = 0; t < zeros.depth.size(); t += 7) zeros.depth[t] = 0.0f;
+    for (const HeightField& hf : {PlateauField(48), zeros})
+        ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed, p),
+                       GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p), hf.name);
+    p.relaxed = true;
+    p.stackedCount = 3;
+    for (ConeKind k : {ConeKind::Stacked, ConeKind::ConeNormal}) {
+        const HeightField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 32, 32));
+        const ConeMap fast = GenerateConeMap(hf, k, p);
+        EXPECT_EQ(fast.channels, k == ConeKind::Stacked ? 3 : 1);
+        ExpectBitEqual(fast, GenerateConeMapBruteForce(hf, k, p),
+                       "relaxed " + std::string(ToString(k)));
+    }
+}
+
+TEST(ConeMap, StackedRelaxedChannelsWidenUpwards) {
+    // Channel 0 (apex on the surface) is the relaxed map itself; a higher apex (channel k)
+    // sees fewer destinations above it and a shorter height to every exit point, so its
+    // ratio is never smaller.
+    const HeightField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 48, 48));
+    ConeMapParams p;
+    p.relaxed = true;
+    p.stackedCount = 4;
+    const ConeMap st = GenerateConeMap(hf, ConeKind::Stacked, p);
+    const ConeMap rel = GenerateConeMap(hf, ConeKind::Relaxed, p);
+    size_t widened = 0;
+    for (int j = 0; j < hf.height; ++j)
+        for (int i = 0; i < hf.width; ++i) {
+            ASSERT_EQ(st.At(i, j, 0), rel.At(i, j)) << i << "," << j;
+            for (int c = 1; c < 4; ++c) {
+                ASSERT_GE(st.At(i, j, c), st.At(i, j, c - 1)) << i << "," << j << " cone " << c;
+                widened += st.At(i, j, c) > st.At(i, j, c - 1);
+            }
+        }
+    EXPECT_GT(widened, size_t(hf.width * hf.height));  // the stack adds information
+}
+
+TEST(ConeMap, RelaxedIsNeverNarrowerThanConservative) {
+    // A destination is a texel above the apex and the listing's exit point lies beyond it and
+    // deeper, so every relaxed ratio is at least the conservative bound of that texel.
+    for (const HeightField& hf : {QuantizeToUnorm8(MakeBuiltinMap("bumps", 64, 64)),
+                                  RandomField(40, 40, 3, true)}) {
+        const ConeMap cone = GenerateConeMap(hf, ConeKind::Cone);
+        const ConeMap rel = GenerateConeMap(hf, ConeKind::Relaxed);
+        for (size_t t = 0; t < cone.values.size(); ++t)
+            ASSERT_GE(rel.values[t], std::min(cone.values[t], 1.0f)) << hf.name << " texel " << t;
+    }
+}
+
+TEST(ConeMap, RelaxedWorkedExampleOfTheDocs) {
+    // docs/cone_maps.md, "Worked example: relaxed vs relaxed-exact": a 16x16 map whose depth
+    // depends on the column only; apex texel i = 1.
+    HeightField hf;
+    hf.width = hf.height = 16;
+    hf.name = "example";
+    const float col[16] = {0.75f, 0.75f, 0.5f, 0.25f, 0.25f, 0.25f, 0.25f, 1, 1, 1, 1, 1, 1, 1, 1, 0.75f};
+    for (int j = 0; j < 16; ++j)
+        for (int i = 0; i < 16; ++i) hf.depth.push_back(col[i]);
+    EXPECT_FLOAT_EQ(GenerateConeMap(hf, ConeKind::Cone).At(1, 5), 0.25f);  // (1/16) / 0.25
+    EXPECT_FLOAT_EQ(GenerateConeMap(hf, ConeKind::RelaxedExact).At(1, 5), 0.625f);  // (5/16) / 0.5
+    ConeMapParams p;
+    // The march from destination i = 6 stops k steps out, in texel 7 (closed form in the
+    // docs): (u_k - 1.5/16) / (0.75 - z_k) with u_k = 6.5/16 + k du, z_k = 0.25 + k dz.
+    auto listing = [](int steps, int k) {
+        const double du = (0.3125 / 0.25) * 0.75 / steps, dz = 0.75 / steps;
+        return (6.5 / 16 + k * du - 1.5 / 16) / (0.75 - (0.25 + k * dz));
+    };
+    p.searchSteps = 128;
+    EXPECT_NEAR(GenerateConeMap(hf, ConeKind::Relaxed, p).At(1, 5), listing(128, 5), 1e-5);
+    EXPECT_NEAR(GenerateConeMap(hf, ConeKind::Relaxed, p).At(1, 5), 0.7417, 5e-5);
+    p.searchSteps = 16;
+    EXPECT_NEAR(GenerateConeMap(hf, ConeKind::Relaxed, p).At(1, 5), listing(16, 1), 1e-5);
+    EXPECT_NEAR(GenerateConeMap(hf, ConeKind::Relaxed, p).At(1, 5), 0.8190, 5e-5);
+    p.searchSteps = 4;
+    EXPECT_EQ(GenerateConeMap(hf, ConeKind::Relaxed, p).At(1, 5), 1.0f);
+}
+
 /// Exact real-number check: no texel above the apex lies strictly inside the stored cone.
 void ExpectConservative(const HeightField& hf, const ConeMap& m) {
     const int W = hf.width, H = hf.height;
@@ -254,6 +360,15 @@ TEST(ConeMap, DeterministicForAnyThreadCount) {
         two = GenerateConeMap(hf, ConeKind::Cone);
     }
     ExpectBitEqual(one, two, "threads");
+    {
+        tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+        one = GenerateConeMap(hf, ConeKind::Relaxed);
+    }
+    {
+        tbb::global_control c(tbb::global_control::max_allowed_parallelism, 4);
+        two = GenerateConeMap(hf, ConeKind::Relaxed);
+    }
+    ExpectBitEqual(one, two, "relaxed threads");
 }
 
 TEST(ConeMap, MipPyramidsReduceWrapAwareForOddSizes) {

@@ -1,0 +1,691 @@
+// Relaxed cone maps by Policarpo & Oliveira's Listing 18-1/18-2 (GPU Gems 3, ch. 18): the
+// definition in float (GPU) arithmetic, its brute force, and the fast exact generator. Used by
+// `relaxed`, `cone-normal --relaxed` and `stacked --relaxed` (apex above the surface).
+//
+// The fast generator evaluates the same float Listing and skips only (source, destination)
+// pairs that provably cannot lower the running minimum. Two bounds do the skipping:
+//  - the distance bound: the march starts at the destination and moves away from the source and
+//    down, so ratio >= |dst - src| / (apex - b) (b = destination depth);
+//  - the exit bound (new): the march stops only in a cell deeper than the ray, hence deeper than
+//    b, and the exit lies on the ray beyond the destination. With L = the distance from the
+//    destination to the nearest strictly deeper cell within the ray's 45° sector (the exit
+//    field, precomputed per texel and sector), the exit is at least L further out and at least
+//    L * (b / |dst - src|) deeper, so ratio >= (delta + L) / (apex - b - L * b / delta).
+// Float error of the listing's march is accounted for by slack terms; the argument is in
+// docs/cone_maps.md ("Exact pruning of the Listing").
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "core/error.h"
+#include "texture/cone_map.h"
+#include "texture/cone_map_detail.h"
+
+namespace reliefsim::detail {
+
+namespace {
+
+/// Nearest-texel index of a float texel coordinate f = u * n, wrapped: the listing's point
+/// sampling with repeat. Same result as fmod on the float (exact) for every f; the integer path
+/// is only taken where the conversion cannot overflow.
+RS_INLINE int WrapFloorIndex(float f, int n) {
+    const float fi = std::floor(f);
+    if (std::abs(fi) < 1073741824.0f) {
+        const int k = int(fi);
+        if (k >= 0 && k < n) return k;
+        if (k < 0 && k >= -n) return k + n;
+        if (k >= n && k < 2 * n) return k - n;
+        return Wrap(k % n, n);
+    }
+    return Wrap(int(std::fmod(double(fi), double(n))), n);
+}
+
+RS_INLINE float NearestWrap(const HeightField& hf, float u, float v) {
+    const int i = WrapFloorIndex(u * float(hf.width), hf.width);
+    const int j = WrapFloorIndex(v * float(hf.height), hf.height);
+    return hf.depth[size_t(j) * size_t(hf.width) + size_t(i)];
+}
+
+constexpr float kInfF = std::numeric_limits<float>::infinity();
+
+/// i mod n for i in [-n, 2n).
+inline int WrapNear(int i, int n) { return i < 0 ? i + n : (i >= n ? i - n : i); }
+constexpr int kSectors = 16;  ///< exit-field sectors: closed 22.5° wedges counter-clockwise from +u
+using SectorBits = uint16_t;
+constexpr SectorBits kAllSectors = 0xFFFF;
+
+}  // namespace
+
+namespace {
+
+/// The listing's float arithmetic for one pair, given the source position (sx, sy), the
+/// destination (dstx, dsty) and its sampled depth dstz. `inv` = 1/steps when steps is a power of
+/// two (then v * inv == v / steps exactly: scaling by a power of two), else 0 (divide).
+RS_INLINE float ListingRatio(const HeightField& hf, float sx, float sy, float dstx, float dsty,
+                             float dstz, int steps, float inv, float apex, float best) {
+    if (!(dstz > 0.0f)) return kInfF;  // NaN in the listing
+    const float src = apex;
+    // Exit point deeper than the apex: the march only goes deeper (step z >= 0), ratio 1.
+    if (!(dstz < src)) return 1.0f;
+    float vx = dstx - sx, vy = dsty - sy, vz = dstz;
+    // Early out, provably exact (no margin): every float operation below is monotone, the
+    // march moves away from the source in x and y (the step has the sign of vx, vy) and down
+    // in z (pz >= dstz), so |ex| >= |vx|, |ey| >= |vy| and 0 < src - pz <= src - dstz, hence
+    // the listing's float ratio is >= this float bound, or it is 1 (pz >= src).
+    // (best = +inf, the brute force's default, never prunes.)
+    const bool prune = best < kInfF;
+    if (prune) {
+        const float lb = std::sqrt(vx * vx + vy * vy) / (src - dstz);
+        if (lb >= best) return best;
+    }
+    vx /= vz;
+    vy /= vz;
+    vz /= vz;
+    const float scale = 1.0f - dstz;
+    vx *= scale;
+    vy *= scale;
+    vz *= scale;
+    const float fs = float(steps);
+    const float stx = inv > 0.0f ? vx * inv : vx / fs;
+    const float sty = inv > 0.0f ? vy * inv : vy / fs;
+    const float stz = inv > 0.0f ? vz * inv : vz / fs;
+    float px = dstx + stx, py = dsty + sty, pz = dstz + stz;
+    if (pz >= src) return 1.0f;
+    const double best2 = double(best) * double(best) * (1.0 + 0x1p-20);
+    for (int i = 1; i < steps; ++i) {
+        if (NearestWrap(hf, px, py) <= pz) {
+            px += stx;
+            py += sty;
+            pz += stz;
+            if (pz >= src) return 1.0f;
+            if (prune) {
+                // The same monotonicity bounds the ratio by the current point: the exit point
+                // lies further out and deeper. fl(sqrt(cx^2 + cy^2) / (src - pz)) >= best is
+                // tested without sqrt or division: in double the squares, the sum and
+                // (src - pz)^2 are exact or within 2^-50, and the 2^-20 factor exceeds the
+                // float rounding of that quotient (< 2^-22), so this implies the float bound
+                // >= best.
+                const double cx = double(px - sx), cy = double(py - sy);
+                const double den = double(src - pz);
+                if (cx * cx + cy * cy >= best2 * den * den) return best;
+            }
+        } else {
+            break;  // the listing keeps sampling the same point from here on: same result
+        }
+    }
+    const float ex = px - sx, ey = py - sy;
+    return std::sqrt(ex * ex + ey * ey) / (src - pz);
+}
+
+/// 1/steps when steps is a power of two, else 0.
+float PowerOfTwoInverse(int steps) {
+    return (steps & (steps - 1)) == 0 ? 1.0f / float(steps) : 0.0f;
+}
+
+}  // namespace
+
+float RelaxedPairRatio(const HeightField& hf, int ti, int tj, int dx, int dy, int steps,
+                       float apex, float best) {
+    const float W = float(hf.width), H = float(hf.height);
+    const float sx = (float(ti) + 0.5f) / W, sy = (float(tj) + 0.5f) / H;
+    const float dstx = sx + float(dx) / W, dsty = sy + float(dy) / H;
+    return ListingRatio(hf, sx, sy, dstx, dsty, NearestWrap(hf, dstx, dsty), steps, 0.0f, apex,
+                        best);
+}
+
+double RelaxedTileLowerBound(int64_t minS, double scale, float src, float dminTile) {
+    // |vx - dx/W| <= 3 * 2^-24 (three roundings of values below 2 in magnitude), so the float
+    // |v| >= uv distance - 2^-21 (sqrt 2 * 3 * 2^-24 < 2^-21); the float sqrt, products, sum,
+    // difference and division lose at most 2^-22 relatively. The slack 2^-20 used here also
+    // covers the double rounding of this expression.
+    const double dist = std::sqrt(double(minS)) / scale - 0x1p-20;
+    if (!(dist > 0)) return 0;
+    return dist * (1.0 - 0x1p-20) / ((double(src) - double(dminTile)) * (1.0 + 0x1p-20));
+}
+
+namespace {
+
+/// Bounds on where the listing's float march can stop, and the exit field: per texel t and
+/// sector k, L[t * 8 + k] <= the uv distance from t's centre to every cell that is strictly
+/// deeper than t and whose eps-dilation meets the closed wedge k at t's centre (cells beyond
+/// the searched window count as being at the window's edge).
+struct ExitField {
+    double eps = 0;  ///< uv: march points lie within eps of the exact ray (see ExitSlack)
+    double eta = 0;  ///< depth: accumulated rounding of the march's z
+    bool usable = false;
+    std::vector<float> L;      ///< kSectors per texel
+    std::vector<float> Lwin;   ///< kSectors per texel: min of L over the 8x8 window starting there
+    std::vector<float> Lwin4;  ///< the same over the 4x4 window
+    std::vector<float> Lwin32; ///< the same over the 32x32 window
+};
+
+/// out[(j*W + i)*C + c] = min of v[(y*W + x)*C + c] over x = i + a*step, y = j + b*step,
+/// a, b in [0, k), wrapped (C interleaved channels). With v itself a window minimum of size
+/// `step`, the result is the window minimum of size k*step.
+std::vector<float> WindowMinima(const std::vector<float>& v, int W, int H, int C, int k,
+                                int step = 1) {
+    const size_t N = size_t(W) * size_t(H), Cs = size_t(C);
+    std::vector<float> rowMin(N * Cs), out(N * Cs);
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
+        for (int j = r.begin(); j < r.end(); ++j)
+            for (int i = 0; i < W; ++i)
+                for (size_t c = 0; c < Cs; ++c) {
+                    float m = v[(size_t(j) * size_t(W) + size_t(i)) * Cs + c];
+                    for (int a = 1; a < k; ++a)
+                        m = std::min(m, v[(size_t(j) * size_t(W) + size_t(Wrap(i + a * step, W))) * Cs + c]);
+                    rowMin[(size_t(j) * size_t(W) + size_t(i)) * Cs + c] = m;
+                }
+    });
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
+        for (int j = r.begin(); j < r.end(); ++j)
+            for (int i = 0; i < W; ++i)
+                for (size_t c = 0; c < Cs; ++c) {
+                    float m = rowMin[(size_t(j) * size_t(W) + size_t(i)) * Cs + c];
+                    for (int a = 1; a < k; ++a)
+                        m = std::min(m, rowMin[(size_t(Wrap(j + a * step, H)) * size_t(W) + size_t(i)) * Cs + c]);
+                    out[(size_t(j) * size_t(W) + size_t(i)) * Cs + c] = m;
+                }
+    });
+    return out;
+}
+
+/// eps covers, for a march point E whose ratio is < 1 (so |E - src| < 1 and |E| < 2): the float
+/// source and destination positions (< 2^-23 per coordinate) and the accumulation of up to
+/// `steps` float additions (< 2^-24 each): E lies within eps of the ray from the exact
+/// destination centre along the float step vector. The same eps also covers the rounding of
+/// |E - src| against |dst - src| + the distance travelled (docs/cone_maps.md).
+ExitField MakeExitFieldSlack(const HeightField& hf, int steps) {
+    ExitField f;
+    const double n = double(std::max(hf.width, hf.height));
+    f.eps = 0x1p-18 + double(steps) * 0x1p-23;
+    f.eta = double(steps) * 0x1p-24 + 0x1p-21;
+    // The march may also end by running out of steps, at pz >= 1 - eta, where the float ratio
+    // is >= fl|v| / (apex - pz) >= (1 / n - 2^-21) / eta. The exit bound ignores that ending,
+    // so it is used only where such a ratio is always >= 1 (then it cannot lower the minimum).
+    f.usable = (1.0 / n - 0x1p-20) >= 2.0 * f.eta && n <= 65536.0;
+    return f;
+}
+
+constexpr double kSectorAngle = 2 * std::numbers::pi / kSectors;
+
+/// Closed sectors within `tol` radians of the direction angle `a`.
+SectorBits AngleSectorMask(double a, double tol) {
+    constexpr double kPi = std::numbers::pi;
+    SectorBits m = 0;
+    for (int k = 0; k < kSectors; ++k) {
+        const double s0 = k * kSectorAngle, s1 = (k + 1) * kSectorAngle;
+        for (int w = -2; w <= 2; ++w)
+            if (a + 2 * kPi * w >= s0 - tol && a + 2 * kPi * w <= s1 + tol)
+                m |= SectorBits(1u << k);
+    }
+    return m;
+}
+
+/// Closed sectors met by the rectangle [x0, x1] x [y0, y1] (uv, relative to the apex),
+/// conservatively (a tolerance widens every test); all sectors when it contains the origin.
+SectorBits RectSectorMask(double x0, double x1, double y0, double y1) {
+    if (x0 <= 0 && x1 >= 0 && y0 <= 0 && y1 >= 0) return kAllSectors;
+    constexpr double kPi = std::numbers::pi;
+    const double mid = std::atan2(0.5 * (y0 + y1), 0.5 * (x0 + x1));
+    double lo = 0, hi = 0;
+    for (double x : {x0, x1})
+        for (double y : {y0, y1}) {
+            const double a = std::remainder(std::atan2(y, x) - mid, 2 * kPi);
+            lo = std::min(lo, a);
+            hi = std::max(hi, a);
+        }
+    lo += mid - 1e-9;
+    hi += mid + 1e-9;
+    SectorBits m = 0;
+    for (int k = 0; k < kSectors; ++k) {
+        const double s0 = k * kSectorAngle, s1 = (k + 1) * kSectorAngle;
+        for (int w = -2; w <= 2; ++w)
+            if (lo + 2 * kPi * w <= s1 && hi + 2 * kPi * w >= s0) m |= SectorBits(1u << k);
+    }
+    return m;
+}
+
+/// The exit-field search window: offsets in [-R, R]^2 (unwrapped, texel units) in 8x8 tiles
+/// sorted by their smallest dilated distance.
+struct ExitOffset {
+    int dx, dy;
+    float dist;  ///< uv distance from the centre to the eps-dilated cell, rounded down
+    SectorBits mask;
+};
+struct ExitTile {
+    int begin, end, ox, oy;
+    float minDist;
+    SectorBits mask;
+};
+
+ExitField BuildExitField(const HeightField& hf, int steps, float inv) {
+    ExitField f = MakeExitFieldSlack(hf, steps);
+    if (!f.usable) return f;
+    const int W = hf.width, H = hf.height;
+    const size_t N = size_t(W) * size_t(H);
+    // Window radius: 1/8 uv (at least 8 texels); farther exits are bounded by the window edge.
+    const int Rx = std::max(8, (W + 7) / 8), Ry = std::max(8, (H + 7) / 8);
+    const double e = f.eps;
+    auto down = [](double v) {
+        float r = float(v);
+        if (double(r) > v) r = std::nextafter(r, 0.0f);
+        return std::max(r, 0.0f);
+    };
+    std::vector<ExitOffset> offs;
+    std::vector<ExitTile> tiles;
+    for (int oy = -Ry; oy <= Ry; oy += kTile)
+        for (int ox = -Rx; ox <= Rx; ox += kTile) {
+            ExitTile t{int(offs.size()), 0, ox, oy, kInfF, 0};
+            for (int dy = oy; dy < std::min(oy + kTile, Ry + 1); ++dy)
+                for (int dx = ox; dx < std::min(ox + kTile, Rx + 1); ++dx) {
+                    if (dx == 0 && dy == 0) continue;
+                    const double x0 = (dx - 0.5) / W - e, x1 = (dx + 0.5) / W + e;
+                    const double y0 = (dy - 0.5) / H - e, y1 = (dy + 0.5) / H + e;
+                    const double ax = std::max({0.0, x0, -x1}), ay = std::max({0.0, y0, -y1});
+                    const ExitOffset o{dx, dy, down(std::sqrt(ax * ax + ay * ay) * (1 - 1e-12)),
+                                       RectSectorMask(x0, x1, y0, y1)};
+                    offs.push_back(o);
+                    t.minDist = std::min(t.minDist, o.dist);
+                    t.mask |= o.mask;
+                }
+            t.end = int(offs.size());
+            if (t.end > t.begin) tiles.push_back(t);
+        }
+    std::stable_sort(tiles.begin(), tiles.end(),
+                     [](const ExitTile& a, const ExitTile& b) { return a.minDist < b.minDist; });
+    // Every cell outside the window is at least this far (its dilation included).
+    const float edge = down(std::min((Rx + 0.5) / W, (Ry + 0.5) / H) - e);
+    float dmax = hf.depth[0];
+    for (float d : hf.depth) dmax = std::max(dmax, d);
+    // 8x8 window maxima of depth, wrapped (tiles without a deeper cell are skipped).
+    std::vector<float> winMax(N);
+    {
+        std::vector<float> rowMax(N);
+        for (int j = 0; j < H; ++j)
+            for (int i = 0; i < W; ++i) {
+                float m = hf.At(i, j);
+                for (int k = 1; k < kTile; ++k) m = std::max(m, hf.At(Wrap(i + k, W), j));
+                rowMax[size_t(j) * size_t(W) + size_t(i)] = m;
+            }
+        for (int j = 0; j < H; ++j)
+            for (int i = 0; i < W; ++i) {
+                float m = rowMax[size_t(j) * size_t(W) + size_t(i)];
+                for (int k = 1; k < kTile; ++k)
+                    m = std::max(m, rowMax[size_t(Wrap(j + k, H)) * size_t(W) + size_t(i)]);
+                winMax[size_t(j) * size_t(W) + size_t(i)] = m;
+            }
+    }
+    f.L.assign(N * kSectors, kInfF);
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
+        for (int j = r.begin(); j < r.end(); ++j)
+            for (int i = 0; i < W; ++i) {
+                // A march from this texel stops only in a cell deeper than its z after the first
+                // step, fl(b + fl(fl(1 - b) / steps)) as the listing computes it (z only grows).
+                const float b = hf.At(i, j);
+                const float scale = 1.0f - b;
+                const float d = b + (inv > 0.0f ? scale * inv : scale / float(steps));
+                float* L = &f.L[(size_t(j) * size_t(W) + size_t(i)) * kSectors];
+                if (!(d < dmax)) continue;  // nothing is deeper: no cell can end a march
+                std::fill(L, L + kSectors, edge);
+                float worst = edge;
+                for (const ExitTile& t : tiles) {
+                    if (t.minDist >= worst) break;
+                    SectorBits open = 0;
+                    for (int k = 0; k < kSectors; ++k)
+                        if ((t.mask >> k & 1u) && L[k] > t.minDist) open |= SectorBits(1u << k);
+                    if (!open) continue;
+                    if (!(winMax[size_t(Wrap(j + t.oy, H)) * size_t(W) + size_t(Wrap(i + t.ox, W))] >
+                          d))
+                        continue;
+                    bool changed = false;
+                    for (int o = t.begin; o < t.end; ++o) {
+                        const ExitOffset& off = offs[size_t(o)];
+                        if (!(off.mask & open)) continue;
+                        if (!(hf.At(Wrap(i + off.dx, W), Wrap(j + off.dy, H)) > d)) continue;
+                        for (unsigned mk = off.mask; mk; mk &= mk - 1) {
+                            const int k = std::countr_zero(mk);
+                            if (off.dist < L[k]) {
+                                L[k] = off.dist;
+                                changed = true;
+                            }
+                        }
+                    }
+                    if (changed) worst = *std::max_element(L, L + kSectors);
+                }
+            }
+    });
+    // Window minima of L per sector, for offset tiles (8x8) and their quarters (4x4).
+    f.Lwin4 = WindowMinima(f.L, W, H, kSectors, 4);
+    f.Lwin = WindowMinima(f.Lwin4, W, H, kSectors, 2, 4);
+    f.Lwin32 = WindowMinima(f.Lwin, W, H, kSectors, 4, kTile);
+    return f;
+}
+
+/// The exit bound, as a test: true when the listing's float ratio is provably >= best (or the
+/// march provably ends at or below the apex: ratio 1) for every pair with source-to-destination
+/// distance >= dLo (exact uv), numerator factor invD <= (1 - 2^-20) / (distance + 2^-21) (so
+/// the depth gained per uv along the ray is >= b * invD), destination depth >= b and
+/// exit-field value >= L. Real numbers in double with slack for every float rounding
+/// (docs/cone_maps.md); the double roundings here are far inside the 2^-20 margins.
+RS_INLINE bool ExitBoundPrunes(const ExitField& f, double dLo, double invD, double b, double L,
+                               double apex, double best, double stepLo = 0) {
+    // A lower bound of the distance the march travels from the destination before it stops
+    // (k * |step| for k >= 1 steps): the exit field, less the float slack, or one step.
+    const double lam = std::max(L - 2.0 * f.eps, stepLo);
+    if (!(lam > 0)) return false;
+    const double den = apex - b - lam * (b * invD) + f.eta;
+    if (!(den > 0)) return true;
+    return (dLo + lam - f.eps) * (1.0 - 0x1p-20) >= best * den;
+}
+
+/// One offset of the pruned search, with what its tests need.
+struct RelaxedOffset {
+    double distLo;  ///< below the float distance bound (RelaxedTileLowerBound's margins)
+    double dist;    ///< exact uv distance
+    double invD;    ///< (1 - 2^-20) / (dist + 2^-21), rounded down
+    int dx, dy;
+    float fdx, fdy;  ///< float(dx) / W, float(dy) / H: the listing's offset
+    uint8_t lx, ly;   ///< position in its 8x8 tile
+    SectorBits mask;  ///< sectors the listing's float step direction can lie in
+};
+/// A group of offsets (an 8x8 tile or one of its 4x4 quarters) with bounds for all of them.
+struct RelaxedGroup {
+    int begin = 0, end = 0;  ///< range in the offset list
+    int ox = 0, oy = 0;      ///< window origin relative to the source texel
+    double distLo = 0;       ///< min distLo of its offsets
+    double dLo = 0;          ///< min exact distance
+    double invD = 1;         ///< min invD (farthest offset)
+    SectorBits mask = 0;     ///< union of the offsets' sectors
+    void Add(const RelaxedOffset& o) {
+        distLo = begin == end ? o.distLo : std::min(distLo, o.distLo);
+        dLo = begin == end ? o.dist : std::min(dLo, o.dist);
+        invD = std::min(invD, o.invD);
+        mask |= o.mask;
+        ++end;
+    }
+};
+struct RelaxedTile {
+    RelaxedGroup all;
+    RelaxedGroup quarter[4];
+    int nx = 0, ny = 0;  ///< extent of its offsets
+};
+/// 4x4 tiles (32x32 offsets): `all` bounds them, [first, last) their range in the tile list.
+struct RelaxedSuperTile {
+    RelaxedGroup all;
+    int64_t minS = 0;
+    int first = 0, last = 0;
+};
+constexpr int kSuper = 4;  ///< tiles per super-tile side
+
+enum class RelaxedOut { Ratio, ConeNormal, Stacked };
+
+}  // namespace
+
+ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool brute,
+                          ConeKind outKind) {
+    const float dmin = CheckedMinDepth(hf);
+    if (hf.width > (1 << 20) || hf.height > (1 << 20))
+        throw Error("height map \"" + hf.name + "\": " + std::to_string(hf.width) + "x" +
+                    std::to_string(hf.height) +
+                    " too large for the relaxed cone map; expected at most 2^20 texels a side "
+                    "(the float error bounds of its pruning assume it)");
+    const RelaxedOut out = outKind == ConeKind::ConeNormal ? RelaxedOut::ConeNormal
+                           : outKind == ConeKind::Stacked  ? RelaxedOut::Stacked
+                                                           : RelaxedOut::Ratio;
+    const int K = out == RelaxedOut::Stacked ? p.stackedCount : 1;
+    const Geometry g = MakeGeometry(hf.width, hf.height);
+    const int W = hf.width, H = hf.height;
+    ConeMap m;
+    m.kind = outKind;
+    m.width = W;
+    m.height = H;
+    m.channels = K;
+    m.values.assign(size_t(W) * size_t(H) * size_t(K), 0.0f);
+    auto store = [&](int i, int j, int c, float best) {
+        m.values[(size_t(j) * size_t(W) + size_t(i)) * size_t(K) + size_t(c)] =
+            out == RelaxedOut::ConeNormal ? ConeNormalFromRatio(double(best)) : best;
+    };
+
+    if (brute) {
+        const std::vector<Offset> offs = MakeOffsets(g, ConeKind::Cone);
+        tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
+            for (int j = r.begin(); j < r.end(); ++j)
+                for (int i = 0; i < W; ++i)
+                    for (int c = 0; c < K; ++c) {
+                        const float apex = out == RelaxedOut::Stacked ? StackedApex(hf.At(i, j), c, K)
+                                                                      : hf.At(i, j);
+                        float best = 1.0f;
+                        for (const Offset& o : offs) {
+                            const float r2 = RelaxedPairRatio(hf, i, j, o.dx, o.dy, p.searchSteps, apex);
+                            if (best > r2) best = r2;
+                        }
+                        store(i, j, c, best);
+                    }
+        });
+        return m;
+    }
+
+    // The offsets of the brute force, in 8x8 tiles sorted by distance, with their bounds;
+    // inside a tile grouped by 4x4 quarter.
+    const TiledOffsets to = MakeTiledOffsets(g, ConeKind::Cone);
+    const std::vector<float> win = WindowMin(hf);
+    std::vector<float> win4;
+    {
+        std::vector<float> d(hf.depth);
+        win4 = WindowMinima(d, W, H, 1, 4);
+    }
+    const float inv = PowerOfTwoInverse(p.searchSteps);
+    const ExitField ef = BuildExitField(hf, p.searchSteps, inv);
+    std::vector<RelaxedOffset> offs;
+    offs.reserve(to.offsets.size());
+    std::vector<RelaxedTile> tiles(to.tiles.size());
+    for (size_t ti = 0; ti < to.tiles.size(); ++ti) {
+        const OffsetTile& t = to.tiles[ti];
+        RelaxedTile& rt = tiles[ti];
+        std::vector<RelaxedOffset> q[4];
+        for (int o = t.begin; o < t.end; ++o) {
+            const Offset& off = to.offsets[size_t(o)];
+            RelaxedOffset ro;
+            ro.dist = std::sqrt(double(off.s)) / g.scale;
+            // distLo * (1 / (d - b)) is below RelaxedTileLowerBound(offset, d, b) by a margin
+            // that covers the double rounding of the product compared against it.
+            ro.distLo = std::max(0.0, ro.dist - 0x1p-20) * (1.0 - 0x1p-19);
+            ro.invD = (1.0 - 0x1p-20) * (1.0 - 0x1p-40) / (ro.dist + 0x1p-21);
+            ro.dx = off.dx;
+            ro.dy = off.dy;
+            ro.fdx = float(off.dx) / float(W);
+            ro.fdy = float(off.dy) / float(H);
+            ro.lx = uint8_t(off.dx - t.ox);
+            ro.ly = uint8_t(off.dy - t.oy);
+            // Sectors the listing's float step direction can lie in: its float offset is
+            // within 2^-22.5 uv of the exact one (|offset| >= 2^-20), so its angle is within
+            // 2^-22 / |offset| of the exact angle; the per-component scaling and rounding of
+            // the step keep weak inequalities between x, y and 0, and every sector boundary
+            // that matters here is of that kind only up to this tolerance.
+            ro.mask = AngleSectorMask(std::atan2(double(off.dy) / H, double(off.dx) / W),
+                                      0x1p-22 / ro.dist + 1e-12);
+            rt.nx = std::max(rt.nx, int(ro.lx) + 1);
+            rt.ny = std::max(rt.ny, int(ro.ly) + 1);
+            q[(ro.lx >= 4 ? 1 : 0) + (ro.ly >= 4 ? 2 : 0)].push_back(ro);
+        }
+        rt.all.begin = rt.all.end = int(offs.size());
+        rt.all.ox = t.ox;
+        rt.all.oy = t.oy;
+        for (int k = 0; k < 4; ++k) {
+            RelaxedGroup& gq = rt.quarter[k];
+            gq.begin = gq.end = int(offs.size());
+            gq.ox = t.ox + (k & 1) * 4;
+            gq.oy = t.oy + (k >> 1) * 4;
+            for (const RelaxedOffset& ro : q[k]) {
+                offs.push_back(ro);
+                gq.Add(ro);
+                rt.all.Add(ro);
+            }
+        }
+    }
+    // Super-tiles: the tiles regrouped by 32x32 window, each group sorted by distance, the
+    // groups sorted by their nearest offset. Any order of evaluation gives the same minimum.
+    std::vector<RelaxedSuperTile> supers;
+    {
+        struct Key { int sx, sy; size_t tile; };
+        std::vector<Key> keys;
+        for (size_t ti = 0; ti < tiles.size(); ++ti)
+            keys.push_back({(tiles[ti].all.ox + g.halfX) / (kTile * kSuper),
+                            (tiles[ti].all.oy + g.halfY) / (kTile * kSuper), ti});
+        std::stable_sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
+            return a.sy != b.sy ? a.sy < b.sy : a.sx < b.sx;
+        });  // tiles keep their distance order inside a group
+        std::vector<RelaxedTile> ordered;
+        ordered.reserve(tiles.size());
+        for (size_t k = 0; k < keys.size();) {
+            RelaxedSuperTile st;
+            st.first = int(ordered.size());
+            st.all.ox = -g.halfX + keys[k].sx * kTile * kSuper;
+            st.all.oy = -g.halfY + keys[k].sy * kTile * kSuper;
+            st.minS = std::numeric_limits<int64_t>::max();
+            const size_t k0 = k;
+            for (; k < keys.size() && keys[k].sx == keys[k0].sx && keys[k].sy == keys[k0].sy; ++k) {
+                const RelaxedTile& t = tiles[keys[k].tile];
+                ordered.push_back(t);
+                st.minS = std::min(st.minS, to.tiles[keys[k].tile].minS);
+                const RelaxedGroup& a = t.all;
+                st.all.distLo = st.all.begin == st.all.end ? a.distLo : std::min(st.all.distLo, a.distLo);
+                st.all.dLo = st.all.begin == st.all.end ? a.dLo : std::min(st.all.dLo, a.dLo);
+                st.all.invD = std::min(st.all.invD, a.invD);
+                st.all.mask |= a.mask;
+                ++st.all.end;
+            }
+            st.last = int(ordered.size());
+            supers.push_back(st);
+        }
+        tiles.swap(ordered);
+        std::stable_sort(supers.begin(), supers.end(),
+                         [](const RelaxedSuperTile& a, const RelaxedSuperTile& b) { return a.minS < b.minS; });
+    }
+    std::vector<float> win32;
+    {
+        std::vector<float> w8(win);
+        win32 = WindowMinima(w8, W, H, 1, kSuper, kTile);
+    }
+    // Pruning is exact (RelaxedPairRatio's float bound, RelaxedTileLowerBound below it for
+    // whole tiles, and the exit bound): a pair is skipped only when its listing ratio provably
+    // cannot lower the running minimum; ties do not change it either (strict "<" as in the
+    // listing), so the minimum equals the brute force's for any order of evaluation.
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& rows) {
+      for (int j = rows.begin(); j < rows.end(); ++j) {
+        int seedDx[16] = {}, seedDy[16] = {};
+        bool seedOk[16] = {};
+        for (int i = 0; i < W; ++i) {
+          const float d = hf.At(i, j);
+          for (int c = 0; c < K; ++c) {
+            const float apex = out == RelaxedOut::Stacked ? StackedApex(d, c, K) : d;
+            float best = 1.0f;
+            int argDx = 0, argDy = 0;
+            bool found = false;
+            // The listing's source position and offsets, the same float values as
+            // RelaxedPairRatio's; the destination depth is the texel's (it samples exactly it).
+            const float sx = (float(i) + 0.5f) / float(W), sy = (float(j) + 0.5f) / float(H);
+            auto consider = [&](int dx, int dy, float fdx, float fdy, float b) {
+                const float r = ListingRatio(hf, sx, sy, sx + fdx, sy + fdy, b, p.searchSteps,
+                                             inv, apex, best);
+                if (best > r) {
+                    best = r;
+                    argDx = dx;
+                    argDy = dy;
+                    found = true;
+                }
+            };
+            if (apex > dmin) {
+                // Seed with the destination that set the left neighbour's minimum (ratios are
+                // spatially coherent, so `best` starts near its final value and the bounds
+                // prune most of the search): any pair of the definition is an upper bound.
+                if (seedOk[c]) {
+                    const int dx = seedDx[c] - 1, dy = seedDy[c];
+                    if ((dx != 0 || dy != 0) && dx >= -g.halfX)
+                        consider(dx, dy, float(dx) / float(W), float(dy) / float(H),
+                                 hf.At(Wrap(i + dx, W), Wrap(j + dy, H)));
+                }
+                const double dApex = double(apex);
+                // A group is skipped when no pair in it can lower `best`: no destination above
+                // the apex in its window, the distance bound, or the exit bound.
+                auto groupPrunes = [&](const RelaxedGroup& q, size_t w, float wmin,
+                                       const std::vector<float>& lwin) {
+                    if (!(wmin < apex)) return true;
+                    if (q.distLo >= double(best) * (dApex - double(wmin))) return true;
+                    if (!ef.usable) return false;
+                    float lt = kInfF;
+                    for (unsigned mk = q.mask; mk; mk &= mk - 1)
+                        lt = std::min(lt, lwin[w * kSectors + size_t(std::countr_zero(mk))]);
+                    return ExitBoundPrunes(ef, q.dLo, q.invD, double(wmin), double(lt), dApex,
+                                           double(best));
+                };
+                const double reachAll = dApex - double(dmin);
+                for (const RelaxedSuperTile& st : supers) {
+                  if (st.all.distLo >= double(best) * reachAll) break;  // sorted by distance
+                  {
+                    const size_t ws = size_t(WrapNear(j + st.all.oy, H)) * size_t(W) +
+                                      size_t(WrapNear(i + st.all.ox, W));
+                    if (groupPrunes(st.all, ws, win32[ws], ef.Lwin32)) continue;
+                  }
+                  for (int tIndex = st.first; tIndex < st.last; ++tIndex) {
+                    const RelaxedTile& t = tiles[size_t(tIndex)];
+                    if (t.all.distLo >= double(best) * reachAll) break;  // sorted by distance
+                    const int wx = WrapNear(i + t.all.ox, W), wy = WrapNear(j + t.all.oy, H);
+                    const size_t w0 = size_t(wy) * size_t(W) + size_t(wx);
+                    if (groupPrunes(t.all, w0, win[w0], ef.Lwin)) continue;
+                    // Wrapped rows and columns of the tile's destinations.
+                    size_t rowBase[kTile];
+                    int col[kTile];
+                    for (int a = 0; a < t.ny; ++a) rowBase[a] = size_t(WrapNear(wy + a, H)) * size_t(W);
+                    for (int a = 0; a < t.nx; ++a) col[a] = WrapNear(wx + a, W);
+                    for (int k = 0; k < 4; ++k) {
+                        const RelaxedGroup& q = t.quarter[k];
+                        if (q.begin == q.end) continue;
+                        const size_t w4 = rowBase[(k >> 1) * 4] + size_t(col[(k & 1) * 4]);
+                        if (groupPrunes(q, w4, win4[w4], ef.Lwin4)) continue;
+                        for (int o = q.begin; o < q.end; ++o) {
+                            const RelaxedOffset& off = offs[size_t(o)];
+                            // The listing samples exactly this texel as the destination (its
+                            // float texel coordinate is within W * 2^-22 < 1/2 of the
+                            // centre), so the bounds with this texel's depth hold for the pair.
+                            const size_t dst = rowBase[off.ly] + size_t(col[off.lx]);
+                            const float b = hf.depth[dst];
+                            const double db = double(b);
+                            if (!(b < apex) || off.distLo >= double(best) * (dApex - db)) continue;
+                            if (ef.usable) {
+                                float lp = kInfF;
+                                for (unsigned mk = off.mask; mk; mk &= mk - 1)
+                                    lp = std::min(lp, ef.L[dst * kSectors + size_t(std::countr_zero(mk))]);
+                                // One step of the march is |v| (1 - b) / (b steps) long (float
+                                // roundings of v, the scale and the step within the factors).
+                                if (!(b > 0.0f)) continue;  // the listing gives NaN: ignored
+                                const double stepLo = (off.dist - 0x1p-22) * (1.0 - db) /
+                                                      (db * double(p.searchSteps)) * (1.0 - 0x1p-20);
+                                if (ExitBoundPrunes(ef, off.dist, off.invD, db, double(lp), dApex,
+                                                    double(best), stepLo))
+                                    continue;
+                            }
+                            consider(off.dx, off.dy, off.fdx, off.fdy, b);
+                        }
+                    }
+                  }
+                }
+            }
+            seedOk[c] = found;
+            seedDx[c] = argDx;
+            seedDy[c] = argDy;
+            store(i, j, c, best);
+          }
+        }
+      }
+    });
+    return m;
+}
+
+}  // namespace reliefsim::detail
