@@ -26,7 +26,7 @@ void BM_ConeMapRelaxed(benchmark::State& state) {
     for (auto _ : state) benchmark::DoNotOptimize(GenerateConeMap(hf, ConeKind::Relaxed));
     state.SetItemsProcessed(state.iterations() * int64_t(n) * n);
 }
-BENCHMARK(BM_ConeMapRelaxed)->Arg(128)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK(BM_ConeMapRelaxed)->Arg(128)->Arg(256)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
 void BM_Acm4PlainSearch(benchmark::State& state) {
     const HeightField hf = QuantizeToUnorm8(MakeBuiltinMap(kMaps[state.range(0)], 256, 256));

@@ -143,6 +143,23 @@ HeightField PlateauField(int n) {
     return hf;
 }
 
+TEST(ConeMap, RelaxedFastEqualsListingBruteForceAt64And128) {
+    // The sizes with the Listing's 128 steps: every built-in, float and 8-bit, at 64²;
+    // an 8-bit built-in and a random float map at 128².
+    for (const char* name : {"shapes", "bumps", "steps", "noise"})
+        for (bool q : {false, true}) {
+            const HeightField f = MakeBuiltinMap(name, 64, 64);
+            const HeightField hf = q ? QuantizeToUnorm8(f) : f;
+            ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed),
+                           GenerateConeMapBruteForce(hf, ConeKind::Relaxed),
+                           std::string(name) + (q ? " u8" : " float") + " 64");
+        }
+    for (const HeightField& hf : {QuantizeToUnorm8(MakeBuiltinMap("shapes", 128, 128)),
+                                  RandomField(128, 128, 31, true)})
+        ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed),
+                       GenerateConeMapBruteForce(hf, ConeKind::Relaxed), hf.name + " 128");
+}
+
 TEST(ConeMap, RelaxedVariantsMatchTheirBruteForce) {
     // Every path of the pruned relaxed search against the listing evaluated for every pair:
     // steps not a power of two (divisions), 1 step (no loop), 4096 steps, the window edge of
