@@ -38,6 +38,15 @@ struct MapsOptions {
 void Status(const char* msg) {
     if (::isatty(2)) std::fprintf(stderr, "\r[maps] %-60s", msg);
 }
+/// A progress bar on stderr when it is a terminal: "[maps] generating  42% [########    ]".
+void ProgressBar(double fraction) {
+    if (!::isatty(2)) return;
+    const int width = 30, filled = int(fraction * width + 0.5);
+    std::fprintf(stderr, "\r[maps] generating %3d%% [%s%s]", int(fraction * 100 + 0.5),
+                 std::string(size_t(filled), '#').c_str(),
+                 std::string(size_t(width - filled), ' ').c_str());
+    std::fflush(stderr);
+}
 void StatusDone() {
     if (::isatty(2)) std::fprintf(stderr, "\r[maps] %-60s\n", "done");
 }
@@ -104,6 +113,7 @@ void Run(const MapsOptions& o) {
     p.adaptive = o.adaptive;
     p.threshold = o.threshold;
     p.adaptiveLevels = o.levels;
+    if (::isatty(2)) p.progress = ProgressBar;
     ValidateConeMapParams(p);
     if (o.relaxed && *kind != ConeKind::ConeNormal && *kind != ConeKind::Stacked)
         throw Error("--relaxed: applies to --kind cone-normal and stacked only (for plain relaxed "

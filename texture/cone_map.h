@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <functional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -52,6 +53,10 @@ std::string ConeEncodingList();
 constexpr float kConeRatioCap = 1024.0f;
 
 /// Generation parameters. Defaults follow the papers.
+/// Progress of a long generation: called with the fraction done in (0, 1], from any worker
+/// thread but never concurrently, at most about 100 times per map and with growing fractions.
+using ConeMapProgress = std::function<void(double fraction)>;
+
 struct ConeMapParams {
     int searchSteps = 128;     ///< Relaxed: Listing 18-2 search steps, in [1, 4096]
     int stackedCount = 4;      ///< Stacked: number of cones K, in [1, 16]
@@ -59,6 +64,7 @@ struct ConeMapParams {
     bool adaptive = false;     ///< Quad/Acm4/Acm8/Cone: 000 Algorithm 1 (never wider than exact)
     float threshold = 0.25f;   ///< adaptive: copy the parent's ratio when its depth range <= this
     int adaptiveLevels = 3;    ///< adaptive: levels of hierarchy above the finest, in [0, 12]
+    ConeMapProgress progress;  ///< optional; not part of the definition (not in cache keys)
 };
 
 /// Throws Error ("--search-steps: ...") for out-of-range parameters.

@@ -3,9 +3,11 @@
 #pragma once
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <mutex>
 #include <vector>
 
 #include "texture/cone_map.h"
@@ -178,8 +180,33 @@ inline float ConeNormalFromRatio(double r) {
     return RoundDownStrict(r / std::sqrt(1.0 + r * r));
 }
 
+/// Counts work units done by any thread and reports whole percents to a ConeMapProgress
+/// (serialised, growing). A no-op without a callback.
+class ProgressCounter {
+public:
+    ProgressCounter(const ConeMapProgress& f, int64_t total) : f_(f), total_(std::max<int64_t>(total, 1)) {}
+    void Add(int64_t n) {
+        if (!f_) return;
+        const int64_t done = done_.fetch_add(n, std::memory_order_relaxed) + n;
+        const int pct = int(std::min<int64_t>(100, done * 100 / total_));
+        if (pct <= reported_.load(std::memory_order_relaxed)) return;
+        std::lock_guard<std::mutex> lock(m_);
+        if (pct <= reported_.load(std::memory_order_relaxed)) return;
+        reported_.store(pct, std::memory_order_relaxed);
+        f_(double(pct) / 100.0);
+    }
+
+private:
+    const ConeMapProgress& f_;
+    int64_t total_;
+    std::atomic<int64_t> done_{0};
+    std::atomic<int> reported_{0};
+    std::mutex m_;
+};
+
 /// Conservative ratio of every texel by levels + distance transforms (exact; 8-bit or few
 /// distinct depths). Writes q per texel.
-void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector<double>& q);
+void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector<double>& q,
+                           const ConeMapProgress& progress = {});
 
 }  // namespace reliefsim::detail

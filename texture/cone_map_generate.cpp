@@ -71,7 +71,7 @@ ConeMap SearchMap(const HeightField& hf, ConeKind kind, const ConeMapParams& p, 
     if (mode == Mode::Fast && (kind == ConeKind::Cone || kind == ConeKind::ConeNormal) &&
         UseLevels(hf)) {
         std::vector<double> q;
-        ConservativeQByLevels(hf, g, q);
+        ConservativeQByLevels(hf, g, q, p.progress);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, q.size(), size_t(1) << 14),
                           [&](const tbb::blocked_range<size_t>& r) {
             for (size_t t = r.begin(); t < r.end(); ++t)
@@ -93,6 +93,7 @@ ConeMap SearchMap(const HeightField& hf, ConeKind kind, const ConeMapParams& p, 
     auto accept = [&](int bx, int by, const Offset& o) {
         return !limiting || IsLimiting(hf, bx, by, o.dx, o.dy);
     };
+    ProgressCounter progress(p.progress, hf.height);
     ForEachRow(hf.height, [&](int j) {
         for (int i = 0; i < W; ++i) {
             const float d = hf.At(i, j);
@@ -112,6 +113,7 @@ ConeMap SearchMap(const HeightField& hf, ConeKind kind, const ConeMapParams& p, 
                     for (int k = 0; k < nS; ++k) out[k] = RatioFromQ(best[k], g.scale);
             }
         }
+        progress.Add(1);
     });
     return m;
 }

@@ -23,7 +23,8 @@ constexpr int64_t kInfS = int64_t(1) << 62;
 constexpr int kColBlock = 32;
 }  // namespace
 
-void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector<double>& q) {
+void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector<double>& q,
+                           const ConeMapProgress& progressFn) {
     const int W = hf.width, H = hf.height;
     const size_t N = size_t(W) * size_t(H);
     // Distinct depths, ascending. This path sees at most a few hundred (UseLevels), so a
@@ -104,7 +105,9 @@ void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector
             for (int i = 0; i < W; ++i)
                 ++levelCount[size_t(lev[size_t(j) * size_t(W) + size_t(i)]) * size_t(H) + size_t(j)];
     });
+    ProgressCounter progress(progressFn, L - 1);
     for (int l = L - 2; l >= 0; --l) {
+        progress.Add(1);
         const float v = levels[size_t(l)];
         // Vertical wrap distance to the set {lev <= l}, per column; columns in blocks.
         tbb::parallel_for(tbb::blocked_range<int>(0, nCB, 1),

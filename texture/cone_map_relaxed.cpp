@@ -454,8 +454,9 @@ ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool br
 
     if (brute) {
         const std::vector<Offset> offs = MakeOffsets(g, ConeKind::Cone);
+        ProgressCounter progress(p.progress, H);
         tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
-            for (int j = r.begin(); j < r.end(); ++j)
+            for (int j = r.begin(); j < r.end(); ++j, progress.Add(1))
                 for (int i = 0; i < W; ++i)
                     for (int c = 0; c < K; ++c) {
                         const float apex = out == RelaxedOut::Stacked ? StackedApex(hf.At(i, j), c, K)
@@ -577,8 +578,9 @@ ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool br
     // whole tiles, and the exit bound): a pair is skipped only when its listing ratio provably
     // cannot lower the running minimum; ties do not change it either (strict "<" as in the
     // listing), so the minimum equals the brute force's for any order of evaluation.
+    ProgressCounter progress(p.progress, H);
     tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& rows) {
-      for (int j = rows.begin(); j < rows.end(); ++j) {
+      for (int j = rows.begin(); j < rows.end(); ++j, progress.Add(1)) {
         int seedDx[16] = {}, seedDy[16] = {};
         bool seedOk[16] = {};
         for (int i = 0; i < W; ++i) {

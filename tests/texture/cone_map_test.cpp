@@ -224,6 +224,25 @@ TEST(ConeMap, RelaxedIsNeverNarrowerThanConservative) {
     }
 }
 
+TEST(ConeMap, ProgressIsReportedInGrowingWholePercents) {
+    // The levels path, the tiled search and the relaxed search each report up to 100 growing
+    // fractions ending at 1; the map does not depend on whether progress is reported.
+    const HeightField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 96, 96));
+    for (ConeKind k : {ConeKind::Cone, ConeKind::Acm4, ConeKind::Relaxed}) {
+        std::vector<double> seen;
+        ConeMapParams p;
+        p.searchSteps = 32;
+        p.progress = [&](double f) { seen.push_back(f); };  // serialised by the generator
+        const ConeMap with = GenerateConeMap(hf, k, p);
+        p.progress = nullptr;
+        ExpectBitEqual(with, GenerateConeMap(hf, k, p), std::string(ToString(k)) + " progress");
+        ASSERT_FALSE(seen.empty()) << ToString(k);
+        EXPECT_LE(seen.size(), 100u) << ToString(k);
+        EXPECT_EQ(seen.back(), 1.0) << ToString(k);
+        for (size_t i = 1; i < seen.size(); ++i) EXPECT_GT(seen[i], seen[i - 1]) << ToString(k);
+    }
+}
+
 TEST(ConeMap, RelaxedWorkedExampleOfTheDocs) {
     // docs/cone_maps.md, "Worked example: relaxed vs relaxed-exact": a 16x16 map whose depth
     // depends on the column only; apex texel i = 1.
