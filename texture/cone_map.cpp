@@ -6,6 +6,9 @@
 #include <numeric>
 #include <sstream>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
@@ -211,6 +214,32 @@ TiledOffsets MakeTiledOffsets(const Geometry& g, ConeKind sectors) {
         }
     std::stable_sort(to.tiles.begin(), to.tiles.end(),
                      [](const OffsetTile& a, const OffsetTile& b) { return a.minS < b.minS; });
+    // Super-tiles: group the (sorted) tiles by 32x32 window, keeping their order in a group.
+    const int span = kTile * kSuperTile;
+    const int sxCount = (2 * g.halfX + 1 + span - 1) / span;
+    std::vector<std::vector<int>> groups(size_t(sxCount) * size_t((2 * g.halfY + 1 + span - 1) / span));
+    for (size_t t = 0; t < to.tiles.size(); ++t) {
+        const int sx = (to.tiles[t].ox + g.halfX) / span, sy = (to.tiles[t].oy + g.halfY) / span;
+        groups[size_t(sy) * size_t(sxCount) + size_t(sx)].push_back(int(t));
+    }
+    for (size_t gi = 0; gi < groups.size(); ++gi) {
+        if (groups[gi].empty()) continue;
+        OffsetSuperTile st;
+        st.first = int(to.superOrder.size());
+        st.ox = -g.halfX + int(gi % size_t(sxCount)) * span;
+        st.oy = -g.halfY + int(gi / size_t(sxCount)) * span;
+        st.minS = std::numeric_limits<int64_t>::max();
+        st.mask = 0;
+        for (int t : groups[gi]) {
+            to.superOrder.push_back(t);
+            st.minS = std::min(st.minS, to.tiles[size_t(t)].minS);
+            st.mask |= to.tiles[size_t(t)].mask;
+        }
+        st.last = int(to.superOrder.size());
+        to.supers.push_back(st);
+    }
+    std::stable_sort(to.supers.begin(), to.supers.end(),
+                     [](const OffsetSuperTile& a, const OffsetSuperTile& b) { return a.minS < b.minS; });
     return to;
 }
 
@@ -231,6 +260,38 @@ std::vector<float> WindowMin(const HeightField& hf) {
             out[size_t(j) * size_t(W) + size_t(i)] = m;
         }
     return out;
+}
+
+std::vector<float> WindowMinima(const std::vector<float>& v, int W, int H, int C, int k,
+                                int step) {
+    const size_t N = size_t(W) * size_t(H), Cs = size_t(C);
+    std::vector<float> rowMin(N * Cs), out(N * Cs);
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
+        for (int j = r.begin(); j < r.end(); ++j)
+            for (int i = 0; i < W; ++i)
+                for (size_t c = 0; c < Cs; ++c) {
+                    float m = v[(size_t(j) * size_t(W) + size_t(i)) * Cs + c];
+                    for (int a = 1; a < k; ++a)
+                        m = std::min(m, v[(size_t(j) * size_t(W) + size_t(Wrap(i + a * step, W))) * Cs + c]);
+                    rowMin[(size_t(j) * size_t(W) + size_t(i)) * Cs + c] = m;
+                }
+    });
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
+        for (int j = r.begin(); j < r.end(); ++j)
+            for (int i = 0; i < W; ++i)
+                for (size_t c = 0; c < Cs; ++c) {
+                    float m = rowMin[(size_t(j) * size_t(W) + size_t(i)) * Cs + c];
+                    for (int a = 1; a < k; ++a)
+                        m = std::min(m, rowMin[(size_t(Wrap(j + a * step, H)) * size_t(W) + size_t(i)) * Cs + c]);
+                    out[(size_t(j) * size_t(W) + size_t(i)) * Cs + c] = m;
+                }
+    });
+    return out;
+}
+
+void MakeSearchWindows(const HeightField& hf, SearchWindows& out) {
+    out.win8 = WindowMin(hf);
+    out.win32 = WindowMinima(out.win8, hf.width, hf.height, 1, kSuperTile, kTile);
 }
 
 float CheckedMinDepth(const HeightField& hf) {

@@ -135,7 +135,7 @@ struct AdaptiveWorkspace::Impl {
     std::vector<std::array<int, 4>> offsKey;       ///< (W, H, kind, level) of offs[l]
     TiledOffsets tiled;
     std::array<int, 3> tiledKey{-1, -1, -1};
-    std::vector<float> win;
+    SearchWindows win;
     std::vector<float> ratio1;                     ///< level-1 block ratios as floats
     std::vector<int64_t> nCopied, nSearched;       ///< per row
 };
@@ -267,10 +267,10 @@ void GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float thres
             ws.tiled = MakeTiledOffsets(g, kind);
             ws.tiledKey = key;
         }
-        ws.win = WindowMin(hf);
+        MakeSearchWindows(hf, ws.win);
     }
     const TiledOffsets& to = ws.tiled;
-    const std::vector<float>& win = ws.win;
+    const SearchWindows& win = ws.win;
     tbb::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& r) {
         for (int j = r.begin(); j < r.end(); ++j)
             for (int i = 0; i < W; ++i) {

@@ -63,10 +63,23 @@ constexpr int kTile = 8;
 uint8_t SectorMask(ConeKind kind, const Geometry& g, int dx, int dy);
 int SectorCount(ConeKind kind);
 
-/// All offsets of the wrap range (except 0,0) grouped in 8x8 tiles, tiles sorted by minS.
+/// 4x4 tiles (a 32x32 window of offsets): superOrder[first, last) lists its tiles by minS.
+struct OffsetSuperTile {
+    int first, last;
+    int ox, oy;  ///< window origin relative to the apex texel (covers ox..ox+31)
+    int64_t minS;
+    uint8_t mask;
+};
+constexpr int kSuperTile = 4;  ///< tiles per super-tile side
+
+/// All offsets of the wrap range (except 0,0) grouped in 8x8 tiles, tiles sorted by minS; the
+/// tiles also grouped by 32x32 window (super-tiles sorted by minS), for searches that mostly
+/// reject whole windows.
 struct TiledOffsets {
     std::vector<Offset> offsets;
     std::vector<OffsetTile> tiles;
+    std::vector<OffsetSuperTile> supers;
+    std::vector<int> superOrder;  ///< tile indices, grouped by super-tile
 };
 TiledOffsets MakeTiledOffsets(const Geometry& g, ConeKind sectors);
 /// The same offsets in plain scan order (for brute force).
@@ -74,6 +87,18 @@ std::vector<Offset> MakeOffsets(const Geometry& g, ConeKind sectors);
 
 /// win[j*W+i] = min depth over the 8x8 window starting at texel (i, j), wrapped.
 std::vector<float> WindowMin(const HeightField& hf);
+
+/// out[(j*W + i)*C + c] = min of v[(y*W + x)*C + c] over x = i + a*step, y = j + b*step,
+/// a, b in [0, k), wrapped (C interleaved channels). With v itself a window minimum of size
+/// `step`, the result is the window minimum of size k*step.
+std::vector<float> WindowMinima(const std::vector<float>& v, int W, int H, int C, int k,
+                                int step = 1);
+
+/// Depth minima over the 8x8 and 32x32 windows starting at each texel (TiledSearch).
+struct SearchWindows {
+    std::vector<float> win8, win32;
+};
+void MakeSearchWindows(const HeightField& hf, SearchWindows& out);
 
 inline int Wrap(int i, int n) {
     int r = i % n;
@@ -86,45 +111,56 @@ float CheckedMinDepth(const HeightField& hf);
 /// The tiled exact search for one apex. best[k] holds the running minimum q per sector (seed
 /// with kInfQ or a parent's bound). accept(bx, by, off) filters blockers (e.g. limiting texels).
 template <class Accept>
-void TiledSearch(const HeightField& hf, const TiledOffsets& to, const std::vector<float>& win,
+void TiledSearch(const HeightField& hf, const TiledOffsets& to, const SearchWindows& sw,
                  float dmin, int ti, int tj, float apex, int nSectors, double* best,
                  Accept&& accept) {
     const int W = hf.width, H = hf.height;
     if (!(apex > dmin)) return;
-    const uint8_t all = uint8_t((1u << nSectors) - 1u);
     auto maxBest = [&] {
         double m = 0;
         for (int k = 0; k < nSectors; ++k) m = std::max(m, best[k]);
         return m;
     };
+    // Offsets run over [-W/2, W/2], so i + ox stays in [-W, 2W).
+    auto wrapNear = [](int i, int n) { return i < 0 ? i + n : (i >= n ? i - n : i); };
     double mb = maxBest();
-    for (const OffsetTile& t : to.tiles) {
-        const double lbGlobal = CandidateQ(t.minS, apex, dmin);
-        if (lbGlobal >= mb) break;
-        const float wmin = win[size_t(Wrap(tj + t.oy, H)) * size_t(W) + size_t(Wrap(ti + t.ox, W))];
-        if (!(wmin < apex)) continue;
-        const double lbTile = CandidateQ(t.minS, apex, wmin);
-        uint8_t open = 0;
-        for (int k = 0; k < nSectors; ++k)
-            if ((t.mask >> k & 1u) && lbTile < best[k]) open |= uint8_t(1u << k);
-        if (!open) continue;
-        bool changed = false;
-        for (int o = t.begin; o < t.end; ++o) {
-            const Offset& off = to.offsets[size_t(o)];
-            if (!(off.mask & open)) continue;
-            const int bx = Wrap(ti + off.dx, W), by = Wrap(tj + off.dy, H);
-            const float b = hf.depth[size_t(by) * size_t(W) + size_t(bx)];
-            if (!(b < apex)) continue;
-            if (!accept(bx, by, off)) continue;
-            const double q = CandidateQ(off.s, apex, b);
+    for (const OffsetSuperTile& st : to.supers) {
+        if (CandidateQ(st.minS, apex, dmin) >= mb) break;  // super-tiles sorted by minS
+        const float w32 = sw.win32[size_t(wrapNear(tj + st.oy, H)) * size_t(W) +
+                                   size_t(wrapNear(ti + st.ox, W))];
+        if (!(w32 < apex)) continue;
+        const double lbSuper = CandidateQ(st.minS, apex, w32);
+        bool any = false;
+        for (int k = 0; k < nSectors; ++k) any |= (st.mask >> k & 1u) && lbSuper < best[k];
+        if (!any) continue;
+        for (int x = st.first; x < st.last; ++x) {
+            const OffsetTile& t = to.tiles[size_t(to.superOrder[size_t(x)])];
+            if (CandidateQ(t.minS, apex, dmin) >= mb) break;  // sorted by minS in the group
+            const float wmin = sw.win8[size_t(wrapNear(tj + t.oy, H)) * size_t(W) +
+                                       size_t(wrapNear(ti + t.ox, W))];
+            if (!(wmin < apex)) continue;
+            const double lbTile = CandidateQ(t.minS, apex, wmin);
+            uint8_t open = 0;
             for (int k = 0; k < nSectors; ++k)
-                if ((off.mask >> k & 1u) && q < best[k]) {
-                    best[k] = q;
-                    changed = true;
-                }
+                if ((t.mask >> k & 1u) && lbTile < best[k]) open |= uint8_t(1u << k);
+            if (!open) continue;
+            bool changed = false;
+            for (int o = t.begin; o < t.end; ++o) {
+                const Offset& off = to.offsets[size_t(o)];
+                if (!(off.mask & open)) continue;
+                const int bx = Wrap(ti + off.dx, W), by = Wrap(tj + off.dy, H);
+                const float b = hf.depth[size_t(by) * size_t(W) + size_t(bx)];
+                if (!(b < apex)) continue;
+                if (!accept(bx, by, off)) continue;
+                const double q = CandidateQ(off.s, apex, b);
+                for (int k = 0; k < nSectors; ++k)
+                    if ((off.mask >> k & 1u) && q < best[k]) {
+                        best[k] = q;
+                        changed = true;
+                    }
+            }
+            if (changed) mb = maxBest();
         }
-        if (changed) mb = maxBest();
-        (void)all;
     }
 }
 

@@ -84,11 +84,11 @@ ConeMap SearchMap(const HeightField& hf, ConeKind kind, const ConeMapParams& p, 
 
     TiledOffsets to;
     std::vector<Offset> offs;
-    std::vector<float> win;
+    SearchWindows win;
     if (mode == Mode::Brute) offs = MakeOffsets(g, sectors);
     else {
         to = MakeTiledOffsets(g, sectors);
-        win = WindowMin(hf);
+        MakeSearchWindows(hf, win);
     }
     auto accept = [&](int bx, int by, const Offset& o) {
         return !limiting || IsLimiting(hf, bx, by, o.dx, o.dy);

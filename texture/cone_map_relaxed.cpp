@@ -165,35 +165,6 @@ struct ExitField {
     std::vector<float> Lwin32; ///< the same over the 32x32 window
 };
 
-/// out[(j*W + i)*C + c] = min of v[(y*W + x)*C + c] over x = i + a*step, y = j + b*step,
-/// a, b in [0, k), wrapped (C interleaved channels). With v itself a window minimum of size
-/// `step`, the result is the window minimum of size k*step.
-std::vector<float> WindowMinima(const std::vector<float>& v, int W, int H, int C, int k,
-                                int step = 1) {
-    const size_t N = size_t(W) * size_t(H), Cs = size_t(C);
-    std::vector<float> rowMin(N * Cs), out(N * Cs);
-    tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
-        for (int j = r.begin(); j < r.end(); ++j)
-            for (int i = 0; i < W; ++i)
-                for (size_t c = 0; c < Cs; ++c) {
-                    float m = v[(size_t(j) * size_t(W) + size_t(i)) * Cs + c];
-                    for (int a = 1; a < k; ++a)
-                        m = std::min(m, v[(size_t(j) * size_t(W) + size_t(Wrap(i + a * step, W))) * Cs + c]);
-                    rowMin[(size_t(j) * size_t(W) + size_t(i)) * Cs + c] = m;
-                }
-    });
-    tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
-        for (int j = r.begin(); j < r.end(); ++j)
-            for (int i = 0; i < W; ++i)
-                for (size_t c = 0; c < Cs; ++c) {
-                    float m = rowMin[(size_t(j) * size_t(W) + size_t(i)) * Cs + c];
-                    for (int a = 1; a < k; ++a)
-                        m = std::min(m, rowMin[(size_t(Wrap(j + a * step, H)) * size_t(W) + size_t(i)) * Cs + c]);
-                    out[(size_t(j) * size_t(W) + size_t(i)) * Cs + c] = m;
-                }
-    });
-    return out;
-}
 
 /// eps covers, for a march point E whose ratio is < 1 (so |E - src| < 1 and |E| < 2): the float
 /// source and destination positions (< 2^-23 per coordinate) and the accumulation of up to
