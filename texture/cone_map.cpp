@@ -262,15 +262,15 @@ std::vector<float> WindowMin(const HeightField& hf) {
     return out;
 }
 
-std::vector<float> WindowMinima(const std::vector<float>& v, int W, int H, int C, int k,
-                                int step) {
+template <class T>
+std::vector<T> WindowMinima(const std::vector<T>& v, int W, int H, int C, int k, int step) {
     const size_t N = size_t(W) * size_t(H), Cs = size_t(C);
-    std::vector<float> rowMin(N * Cs), out(N * Cs);
+    std::vector<T> rowMin(N * Cs), out(N * Cs);
     tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
         for (int j = r.begin(); j < r.end(); ++j)
             for (int i = 0; i < W; ++i)
                 for (size_t c = 0; c < Cs; ++c) {
-                    float m = v[(size_t(j) * size_t(W) + size_t(i)) * Cs + c];
+                    T m = v[(size_t(j) * size_t(W) + size_t(i)) * Cs + c];
                     for (int a = 1; a < k; ++a)
                         m = std::min(m, v[(size_t(j) * size_t(W) + size_t(Wrap(i + a * step, W))) * Cs + c]);
                     rowMin[(size_t(j) * size_t(W) + size_t(i)) * Cs + c] = m;
@@ -280,7 +280,7 @@ std::vector<float> WindowMinima(const std::vector<float>& v, int W, int H, int C
         for (int j = r.begin(); j < r.end(); ++j)
             for (int i = 0; i < W; ++i)
                 for (size_t c = 0; c < Cs; ++c) {
-                    float m = rowMin[(size_t(j) * size_t(W) + size_t(i)) * Cs + c];
+                    T m = rowMin[(size_t(j) * size_t(W) + size_t(i)) * Cs + c];
                     for (int a = 1; a < k; ++a)
                         m = std::min(m, rowMin[(size_t(Wrap(j + a * step, H)) * size_t(W) + size_t(i)) * Cs + c]);
                     out[(size_t(j) * size_t(W) + size_t(i)) * Cs + c] = m;
@@ -288,6 +288,9 @@ std::vector<float> WindowMinima(const std::vector<float>& v, int W, int H, int C
     });
     return out;
 }
+
+template std::vector<float> WindowMinima(const std::vector<float>&, int, int, int, int, int);
+template std::vector<uint16_t> WindowMinima(const std::vector<uint16_t>&, int, int, int, int, int);
 
 void MakeSearchWindows(const HeightField& hf, SearchWindows& out) {
     out.win8 = WindowMin(hf);

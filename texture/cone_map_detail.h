@@ -91,8 +91,12 @@ std::vector<float> WindowMin(const HeightField& hf);
 /// out[(j*W + i)*C + c] = min of v[(y*W + x)*C + c] over x = i + a*step, y = j + b*step,
 /// a, b in [0, k), wrapped (C interleaved channels). With v itself a window minimum of size
 /// `step`, the result is the window minimum of size k*step.
-std::vector<float> WindowMinima(const std::vector<float>& v, int W, int H, int C, int k,
-                                int step = 1);
+/// T: float, or the upper 16 bits of non-negative floats (their order is the floats' order).
+template <class T>
+std::vector<T> WindowMinima(const std::vector<T>& v, int W, int H, int C, int k, int step = 1);
+extern template std::vector<float> WindowMinima(const std::vector<float>&, int, int, int, int, int);
+extern template std::vector<uint16_t> WindowMinima(const std::vector<uint16_t>&, int, int, int,
+                                                   int, int);
 
 /// Depth minima over the 8x8 and 32x32 windows starting at each texel (TiledSearch).
 struct SearchWindows {

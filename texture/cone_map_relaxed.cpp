@@ -159,11 +159,22 @@ struct ExitField {
     double eps = 0;  ///< uv: march points lie within eps of the exact ray (see ExitSlack)
     double eta = 0;  ///< depth: accumulated rounding of the march's z
     bool usable = false;
-    std::vector<float> L;      ///< kSectors per texel
-    std::vector<float> Lwin;   ///< kSectors per texel: min of L over the 8x8 window starting there
-    std::vector<float> Lwin4;  ///< the same over the 4x4 window
-    std::vector<float> Lwin32; ///< the same over the 32x32 window
+    // Stored as the upper 16 bits of the float (bfloat16 truncated: never larger, so still a
+    // lower bound; half the memory of floats, 128 MB for all four at 1024²).
+    std::vector<uint16_t> L;      ///< kSectors per texel
+    std::vector<uint16_t> Lwin;   ///< kSectors per texel: min of L over the 8x8 window starting there
+    std::vector<uint16_t> Lwin4;  ///< the same over the 4x4 window
+    std::vector<uint16_t> Lwin32; ///< the same over the 32x32 window
 };
+
+/// Non-negative float -> its upper 16 bits (rounds toward zero, keeps +inf); and back.
+inline uint16_t PackDown(float v) { return uint16_t(std::bit_cast<uint32_t>(v) >> 16); }
+inline float Unpack(uint16_t h) { return std::bit_cast<float>(uint32_t(h) << 16); }
+std::vector<uint16_t> PackAll(const std::vector<float>& v) {
+    std::vector<uint16_t> out(v.size());
+    for (size_t i = 0; i < v.size(); ++i) out[i] = PackDown(v[i]);
+    return out;
+}
 
 
 /// eps covers, for a march point E whose ratio is < 1 (so |E - src| < 1 and |E| < 2): the float
@@ -292,7 +303,7 @@ ExitField BuildExitField(const HeightField& hf, int steps, float inv) {
                 winMax[size_t(j) * size_t(W) + size_t(i)] = m;
             }
     }
-    f.L.assign(N * kSectors, kInfF);
+    std::vector<float> Lf(N * kSectors, kInfF);
     tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
         for (int j = r.begin(); j < r.end(); ++j)
             for (int i = 0; i < W; ++i) {
@@ -301,7 +312,7 @@ ExitField BuildExitField(const HeightField& hf, int steps, float inv) {
                 const float b = hf.At(i, j);
                 const float scale = 1.0f - b;
                 const float d = b + (inv > 0.0f ? scale * inv : scale / float(steps));
-                float* L = &f.L[(size_t(j) * size_t(W) + size_t(i)) * kSectors];
+                float* L = &Lf[(size_t(j) * size_t(W) + size_t(i)) * kSectors];
                 if (!(d < dmax)) continue;  // nothing is deeper: no cell can end a march
                 std::fill(L, L + kSectors, edge);
                 float worst = edge;
@@ -332,6 +343,9 @@ ExitField BuildExitField(const HeightField& hf, int steps, float inv) {
             }
     });
     // Window minima of L per sector, for offset tiles (8x8) and their quarters (4x4).
+    // On the packed values: their order is the floats' order.
+    f.L = PackAll(Lf);
+    Lf = {};
     f.Lwin4 = WindowMinima(f.L, W, H, kSectors, 4);
     f.Lwin = WindowMinima(f.Lwin4, W, H, kSectors, 2, 4);
     f.Lwin32 = WindowMinima(f.Lwin, W, H, kSectors, 4, kTile);
@@ -588,13 +602,13 @@ ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool br
                 // A group is skipped when no pair in it can lower `best`: no destination above
                 // the apex in its window, the distance bound, or the exit bound.
                 auto groupPrunes = [&](const RelaxedGroup& q, size_t w, float wmin,
-                                       const std::vector<float>& lwin) {
+                                       const std::vector<uint16_t>& lwin) {
                     if (!(wmin < apex)) return true;
                     if (q.distLo >= double(best) * (dApex - double(wmin))) return true;
                     if (!ef.usable) return false;
                     float lt = kInfF;
                     for (unsigned mk = q.mask; mk; mk &= mk - 1)
-                        lt = std::min(lt, lwin[w * kSectors + size_t(std::countr_zero(mk))]);
+                        lt = std::min(lt, Unpack(lwin[w * kSectors + size_t(std::countr_zero(mk))]));
                     return ExitBoundPrunes(ef, q.dLo, q.invD, double(wmin), double(lt), dApex,
                                            double(best));
                 };
@@ -634,7 +648,7 @@ ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool br
                             if (ef.usable) {
                                 float lp = kInfF;
                                 for (unsigned mk = off.mask; mk; mk &= mk - 1)
-                                    lp = std::min(lp, ef.L[dst * kSectors + size_t(std::countr_zero(mk))]);
+                                    lp = std::min(lp, Unpack(ef.L[dst * kSectors + size_t(std::countr_zero(mk))]));
                                 // One step of the march is |v| (1 - b) / (b steps) long (float
                                 // roundings of v, the scale and the step within the factors).
                                 if (!(b > 0.0f)) continue;  // the listing gives NaN: ignored
