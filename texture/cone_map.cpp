@@ -244,49 +244,41 @@ TiledOffsets MakeTiledOffsets(const Geometry& g, ConeKind sectors) {
 }
 
 std::vector<float> WindowMin(const HeightField& hf) {
-    const int W = hf.width, H = hf.height;
-    std::vector<float> rowMin(size_t(W) * size_t(H)), out(size_t(W) * size_t(H));
-    for (int j = 0; j < H; ++j)
-        for (int i = 0; i < W; ++i) {
-            float m = hf.At(i, j);
-            for (int k = 1; k < kTile; ++k) m = std::min(m, hf.At(Wrap(i + k, W), j));
-            rowMin[size_t(j) * size_t(W) + size_t(i)] = m;
-        }
-    for (int j = 0; j < H; ++j)
-        for (int i = 0; i < W; ++i) {
-            float m = rowMin[size_t(j) * size_t(W) + size_t(i)];
-            for (int k = 1; k < kTile; ++k)
-                m = std::min(m, rowMin[size_t(Wrap(j + k, H)) * size_t(W) + size_t(i)]);
-            out[size_t(j) * size_t(W) + size_t(i)] = m;
-        }
+    return WindowMinima(hf.depth, hf.width, hf.height, 1, kTile);
+}
+
+template <class T, class Op>
+std::vector<T> WindowReduce(const std::vector<T>& v, int W, int H, int C, int k, int step, Op op) {
+    const size_t Cs = size_t(C);
+    // One separable pass: along x (dx = 1) or y (dx = 0), k samples `step` apart, wrapped.
+    auto pass = [&](const std::vector<T>& in, std::vector<T>& out, bool alongX) {
+        tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
+            for (int j = r.begin(); j < r.end(); ++j)
+                for (int i = 0; i < W; ++i)
+                    for (size_t c = 0; c < Cs; ++c) {
+                        T m = in[(size_t(j) * size_t(W) + size_t(i)) * Cs + c];
+                        for (int a = 1; a < k; ++a) {
+                            const int x = alongX ? Wrap(i + a * step, W) : i;
+                            const int y = alongX ? j : Wrap(j + a * step, H);
+                            m = op(m, in[(size_t(y) * size_t(W) + size_t(x)) * Cs + c]);
+                        }
+                        out[(size_t(j) * size_t(W) + size_t(i)) * Cs + c] = m;
+                    }
+        });
+    };
+    std::vector<T> rows(v.size()), out(v.size());
+    pass(v, rows, true);
+    pass(rows, out, false);
     return out;
 }
 
 template <class T>
 std::vector<T> WindowMinima(const std::vector<T>& v, int W, int H, int C, int k, int step) {
-    const size_t N = size_t(W) * size_t(H), Cs = size_t(C);
-    std::vector<T> rowMin(N * Cs), out(N * Cs);
-    tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
-        for (int j = r.begin(); j < r.end(); ++j)
-            for (int i = 0; i < W; ++i)
-                for (size_t c = 0; c < Cs; ++c) {
-                    T m = v[(size_t(j) * size_t(W) + size_t(i)) * Cs + c];
-                    for (int a = 1; a < k; ++a)
-                        m = std::min(m, v[(size_t(j) * size_t(W) + size_t(Wrap(i + a * step, W))) * Cs + c]);
-                    rowMin[(size_t(j) * size_t(W) + size_t(i)) * Cs + c] = m;
-                }
-    });
-    tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
-        for (int j = r.begin(); j < r.end(); ++j)
-            for (int i = 0; i < W; ++i)
-                for (size_t c = 0; c < Cs; ++c) {
-                    T m = rowMin[(size_t(j) * size_t(W) + size_t(i)) * Cs + c];
-                    for (int a = 1; a < k; ++a)
-                        m = std::min(m, rowMin[(size_t(Wrap(j + a * step, H)) * size_t(W) + size_t(i)) * Cs + c]);
-                    out[(size_t(j) * size_t(W) + size_t(i)) * Cs + c] = m;
-                }
-    });
-    return out;
+    return WindowReduce(v, W, H, C, k, step, [](T a, T b) { return std::min(a, b); });
+}
+
+std::vector<float> WindowMaxima(const std::vector<float>& v, int W, int H, int k) {
+    return WindowReduce(v, W, H, 1, k, 1, [](float a, float b) { return std::max(a, b); });
 }
 
 template std::vector<float> WindowMinima(const std::vector<float>&, int, int, int, int, int);

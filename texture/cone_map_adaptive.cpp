@@ -102,14 +102,7 @@ void BlockSearch(const Level& L, const std::vector<BlockOffset>& offs, float dmi
         const size_t b = size_t(Wrap(bj + o.ky, L.ny)) * size_t(L.nx) + size_t(Wrap(bi + o.kx, L.nx));
         const float top = L.dmin[b];
         if (!(top < apex)) continue;
-        const double q = CandidateQ(o.s, apex, top);
-        bool changed = false;
-        for (int k = 0; k < nS; ++k)
-            if ((o.mask >> k & 1u) && q < best[k]) {
-                best[k] = q;
-                changed = true;
-            }
-        if (changed) {
+        if (LowerSectors(o.mask, CandidateQ(o.s, apex, top), nS, best)) {
             mb = 0;
             for (int k = 0; k < nS; ++k) mb = std::max(mb, best[k]);
         }

@@ -10,6 +10,7 @@
 #include <mutex>
 #include <vector>
 
+#include "core/error.h"
 #include "texture/cone_map.h"
 
 namespace reliefsim::detail {
@@ -98,6 +99,9 @@ extern template std::vector<float> WindowMinima(const std::vector<float>&, int, 
 extern template std::vector<uint16_t> WindowMinima(const std::vector<uint16_t>&, int, int, int,
                                                    int, int);
 
+/// The same with max, one channel, step 1.
+std::vector<float> WindowMaxima(const std::vector<float>& v, int W, int H, int k);
+
 /// Depth minima over the 8x8 and 32x32 windows starting at each texel (TiledSearch).
 struct SearchWindows {
     std::vector<float> win8, win32;
@@ -111,6 +115,30 @@ inline int Wrap(int i, int n) {
 
 /// Validates the field and returns min depth.
 float CheckedMinDepth(const HeightField& hf);
+
+/// best[k] = min(best[k], q) for the sectors k in mask; true when one improved.
+inline bool LowerSectors(uint8_t mask, double q, int nSectors, double* best) {
+    bool changed = false;
+    for (int k = 0; k < nSectors; ++k)
+        if ((mask >> k & 1u) && q < best[k]) {
+            best[k] = q;
+            changed = true;
+        }
+    return changed;
+}
+
+/// One blocker candidate: updates best[k] of the sectors in off.mask when the texel at the
+/// offset is above the apex and accepted; true when a sector improved.
+template <class Accept>
+RS_INLINE bool ConsiderBlocker(const HeightField& hf, const Offset& off, int ti, int tj,
+                               float apex, int nSectors, double* best, Accept& accept) {
+    const int W = hf.width, H = hf.height;
+    const int bx = Wrap(ti + off.dx, W), by = Wrap(tj + off.dy, H);
+    const float b = hf.depth[size_t(by) * size_t(W) + size_t(bx)];
+    if (!(b < apex)) return false;
+    if (!accept(bx, by, off)) return false;
+    return LowerSectors(off.mask, CandidateQ(off.s, apex, b), nSectors, best);
+}
 
 /// The tiled exact search for one apex. best[k] holds the running minimum q per sector (seed
 /// with kInfQ or a parent's bound). accept(bx, by, off) filters blockers (e.g. limiting texels).
@@ -151,17 +179,8 @@ void TiledSearch(const HeightField& hf, const TiledOffsets& to, const SearchWind
             bool changed = false;
             for (int o = t.begin; o < t.end; ++o) {
                 const Offset& off = to.offsets[size_t(o)];
-                if (!(off.mask & open)) continue;
-                const int bx = Wrap(ti + off.dx, W), by = Wrap(tj + off.dy, H);
-                const float b = hf.depth[size_t(by) * size_t(W) + size_t(bx)];
-                if (!(b < apex)) continue;
-                if (!accept(bx, by, off)) continue;
-                const double q = CandidateQ(off.s, apex, b);
-                for (int k = 0; k < nSectors; ++k)
-                    if ((off.mask >> k & 1u) && q < best[k]) {
-                        best[k] = q;
-                        changed = true;
-                    }
+                if (off.mask & open)
+                    changed |= ConsiderBlocker(hf, off, ti, tj, apex, nSectors, best, accept);
             }
             if (changed) mb = maxBest();
         }
@@ -172,16 +191,7 @@ void TiledSearch(const HeightField& hf, const TiledOffsets& to, const SearchWind
 template <class Accept>
 void BruteSearch(const HeightField& hf, const std::vector<Offset>& offs, int ti, int tj,
                  float apex, int nSectors, double* best, Accept&& accept) {
-    const int W = hf.width, H = hf.height;
-    for (const Offset& off : offs) {
-        const int bx = Wrap(ti + off.dx, W), by = Wrap(tj + off.dy, H);
-        const float b = hf.depth[size_t(by) * size_t(W) + size_t(bx)];
-        if (!(b < apex)) continue;
-        if (!accept(bx, by, off)) continue;
-        const double q = CandidateQ(off.s, apex, b);
-        for (int k = 0; k < nSectors; ++k)
-            if ((off.mask >> k & 1u) && q < best[k]) best[k] = q;
-    }
+    for (const Offset& off : offs) ConsiderBlocker(hf, off, ti, tj, apex, nSectors, best, accept);
 }
 
 /// Bán et al.'s limiting test: the blocker's outward neighbour (one texel further along the

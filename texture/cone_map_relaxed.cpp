@@ -286,23 +286,7 @@ ExitField BuildExitField(const HeightField& hf, int steps, float inv) {
     float dmax = hf.depth[0];
     for (float d : hf.depth) dmax = std::max(dmax, d);
     // 8x8 window maxima of depth, wrapped (tiles without a deeper cell are skipped).
-    std::vector<float> winMax(N);
-    {
-        std::vector<float> rowMax(N);
-        for (int j = 0; j < H; ++j)
-            for (int i = 0; i < W; ++i) {
-                float m = hf.At(i, j);
-                for (int k = 1; k < kTile; ++k) m = std::max(m, hf.At(Wrap(i + k, W), j));
-                rowMax[size_t(j) * size_t(W) + size_t(i)] = m;
-            }
-        for (int j = 0; j < H; ++j)
-            for (int i = 0; i < W; ++i) {
-                float m = rowMax[size_t(j) * size_t(W) + size_t(i)];
-                for (int k = 1; k < kTile; ++k)
-                    m = std::max(m, rowMax[size_t(Wrap(j + k, H)) * size_t(W) + size_t(i)]);
-                winMax[size_t(j) * size_t(W) + size_t(i)] = m;
-            }
-    }
+    const std::vector<float> winMax = WindowMaxima(hf.depth, W, H, kTile);
     std::vector<float> Lf(N * kSectors, kInfF);
     tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
         for (int j = r.begin(); j < r.end(); ++j)
