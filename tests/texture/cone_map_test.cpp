@@ -575,5 +575,55 @@ TEST(ConeMap, GpuGemsTile1ConeMapStatistics) {
 #endif
 }
 
+TEST(ConeMap, GpuGemsMapsStoreRatioTimesSourceDepth) {
+    // Finding (docs/cone_maps.md): the chapter's companion maps hold min(ratio, 1) * d, d the
+    // texel's depth, for both its conservative and its relaxed (Listing 18-2, 128 steps)
+    // maps; that explains their zeros at depth 0 and why they are narrower than the
+    // definitions. Compared in 8-bit codes against our exact maps times d.
+#ifndef RS_SHARED_DATA
+    GTEST_SKIP() << "RS_SHARED_DATA not defined";
+#else
+    const std::string dir = std::string(RS_SHARED_DATA) + "/gpugems3-ch18/";
+    struct Case {
+        const char* map;
+        const char* cone;
+        ConeKind kind;
+        double within2;  ///< least share of texels within 2 codes of ours * d
+    };
+    for (const Case& c : {Case{"tile1", "tile1_cone", ConeKind::Cone, 0.99},
+                          Case{"tile1", "tile1_relaxedcone", ConeKind::Relaxed, 0.75},
+                          Case{"rockbump", "rockbump_relaxedcone", ConeKind::Relaxed, 0.65}}) {
+        const std::string hpath = dir + c.map + ".tga", cpath = dir + c.cone + ".tga";
+        if (!std::filesystem::exists(hpath) || !std::filesystem::exists(cpath))
+            GTEST_SKIP() << dir << " absent";
+        MapLoadOptions lo;
+        lo.channel = Channel::A;
+        lo.stores = Stores::Depth;
+        const HeightField hf = LoadHeightMapFile(hpath, lo);
+        const ConeMap ours = GenerateConeMap(hf, c.kind);
+        const ConeMap gg = LoadExternalConeMap(cpath, c.kind, 2, hf.width, hf.height);
+        int64_t n = 0, near2 = 0, plainNear2 = 0;
+        std::vector<int> diff;
+        for (int j = 0; j < hf.height; ++j)
+            for (int i = 0; i < hf.width; ++i) {
+                const float r = std::min(ours.At(i, j), 1.0f), d = hf.At(i, j);
+                const long g = std::lround(gg.At(i, j) * 255.0f);
+                const long scaled = std::lround(double(r) * double(d) * 255.0);
+                ++n;
+                near2 += std::abs(g - scaled) <= 2;
+                plainNear2 += std::abs(g - std::lround(double(r) * 255.0)) <= 2;
+                diff.push_back(int(g - scaled));
+            }
+        std::nth_element(diff.begin(), diff.begin() + std::ptrdiff_t(diff.size() / 2), diff.end());
+        std::cout << c.cone << ": within 2 codes of ratio * depth " << double(near2) / double(n)
+                  << " (of the plain ratio " << double(plainNear2) / double(n)
+                  << "), median difference " << diff[diff.size() / 2] << " codes\n";
+        EXPECT_GE(double(near2), c.within2 * double(n)) << c.cone;
+        EXPECT_LE(std::abs(diff[diff.size() / 2]), 1) << c.cone;
+        EXPECT_LT(plainNear2 * 2, near2) << c.cone;  // the plain ratio fits far worse
+    }
+#endif
+}
+
 }  // namespace
 }  // namespace reliefsim
