@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -119,25 +120,31 @@ float CheckedMinDepth(const HeightField& hf);
 /// best[k] = min(best[k], q) for the sectors k in mask; true when one improved.
 inline bool LowerSectors(uint8_t mask, double q, int nSectors, double* best) {
     bool changed = false;
-    for (int k = 0; k < nSectors; ++k)
-        if ((mask >> k & 1u) && q < best[k]) {
+    for (unsigned m = mask & ((1u << nSectors) - 1u); m; m &= m - 1) {
+        const int k = std::countr_zero(m);
+        if (q < best[k]) {
             best[k] = q;
             changed = true;
         }
+    }
     return changed;
 }
 
 /// One blocker candidate: updates best[k] of the sectors in off.mask when the texel at the
 /// offset is above the apex and accepted; true when a sector improved.
 template <class Accept>
-RS_INLINE bool ConsiderBlocker(const HeightField& hf, const Offset& off, int ti, int tj,
-                               float apex, int nSectors, double* best, Accept& accept) {
-    const int W = hf.width, H = hf.height;
-    const int bx = Wrap(ti + off.dx, W), by = Wrap(tj + off.dy, H);
-    const float b = hf.depth[size_t(by) * size_t(W) + size_t(bx)];
+RS_INLINE bool ConsiderBlockerAt(const HeightField& hf, const Offset& off, int bx, int by,
+                                 float apex, int nSectors, double* best, Accept& accept) {
+    const float b = hf.depth[size_t(by) * size_t(hf.width) + size_t(bx)];
     if (!(b < apex)) return false;
     if (!accept(bx, by, off)) return false;
     return LowerSectors(off.mask, CandidateQ(off.s, apex, b), nSectors, best);
+}
+template <class Accept>
+RS_INLINE bool ConsiderBlocker(const HeightField& hf, const Offset& off, int ti, int tj,
+                               float apex, int nSectors, double* best, Accept& accept) {
+    return ConsiderBlockerAt(hf, off, Wrap(ti + off.dx, hf.width), Wrap(tj + off.dy, hf.height),
+                             apex, nSectors, best, accept);
 }
 
 /// The tiled exact search for one apex. best[k] holds the running minimum q per sector (seed
@@ -168,8 +175,9 @@ void TiledSearch(const HeightField& hf, const TiledOffsets& to, const SearchWind
         for (int x = st.first; x < st.last; ++x) {
             const OffsetTile& t = to.tiles[size_t(to.superOrder[size_t(x)])];
             if (CandidateQ(t.minS, apex, dmin) >= mb) break;  // sorted by minS in the group
-            const float wmin = sw.win8[size_t(wrapNear(tj + t.oy, H)) * size_t(W) +
-                                       size_t(wrapNear(ti + t.ox, W))];
+            // The tile's window origin, wrapped; its texels are at most W (H) further.
+            const int wx = wrapNear(ti + t.ox, W), wy = wrapNear(tj + t.oy, H);
+            const float wmin = sw.win8[size_t(wy) * size_t(W) + size_t(wx)];
             if (!(wmin < apex)) continue;
             const double lbTile = CandidateQ(t.minS, apex, wmin);
             uint8_t open = 0;
@@ -179,8 +187,11 @@ void TiledSearch(const HeightField& hf, const TiledOffsets& to, const SearchWind
             bool changed = false;
             for (int o = t.begin; o < t.end; ++o) {
                 const Offset& off = to.offsets[size_t(o)];
-                if (off.mask & open)
-                    changed |= ConsiderBlocker(hf, off, ti, tj, apex, nSectors, best, accept);
+                if (!(off.mask & open)) continue;
+                int bx = wx + (off.dx - t.ox), by = wy + (off.dy - t.oy);
+                if (bx >= W) bx -= W;
+                if (by >= H) by -= H;
+                changed |= ConsiderBlockerAt(hf, off, bx, by, apex, nSectors, best, accept);
             }
             if (changed) mb = maxBest();
         }
