@@ -257,9 +257,10 @@ std::vector<T> WindowReduce(const std::vector<T>& v, int W, int H, int C, int k,
                 for (int i = 0; i < W; ++i)
                     for (size_t c = 0; c < Cs; ++c) {
                         T m = in[(size_t(j) * size_t(W) + size_t(i)) * Cs + c];
-                        for (int a = 1; a < k; ++a) {
-                            const int x = alongX ? Wrap(i + a * step, W) : i;
-                            const int y = alongX ? j : Wrap(j + a * step, H);
+                        const int n = alongX ? W : H, p0 = alongX ? i : j;
+                        for (int a = 1, p = p0 + step; a < k; ++a, p += step) {
+                            if (p >= n) p = p - n < n ? p - n : Wrap(p, n);  // no modulo mostly
+                            const int x = alongX ? p : i, y = alongX ? j : p;
                             m = op(m, in[(size_t(y) * size_t(W) + size_t(x)) * Cs + c]);
                         }
                         out[(size_t(j) * size_t(W) + size_t(i)) * Cs + c] = m;
