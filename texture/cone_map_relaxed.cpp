@@ -6,13 +6,15 @@
 // pairs that provably cannot lower the running minimum. Two bounds do the skipping:
 //  - the distance bound: the march starts at the destination and moves away from the source and
 //    down, so ratio >= |dst - src| / (apex - b) (b = destination depth);
-//  - the exit bound (new): the march stops only in a cell deeper than the ray, hence deeper than
-//    b, and the exit lies on the ray beyond the destination. With L = the distance from the
-//    destination to the nearest strictly deeper cell within the ray's 45° sector (the exit
-//    field, precomputed per texel and sector), the exit is at least L further out and at least
-//    L * (b / |dst - src|) deeper, so ratio >= (delta + L) / (apex - b - L * b / delta).
-// Float error of the listing's march is accounted for by slack terms; the argument is in
-// docs/cone_maps.md ("Exact pruning of the Listing").
+//  - the exit bound: the march stops only in a cell deeper than the ray, hence deeper than the
+//    ray's z after its first step, and the exit lies on the ray beyond the destination. With
+//    L = the distance from the destination to the nearest such cell within the ray's 22.5°
+//    sector (the exit field, precomputed per texel and sector), the exit is at least L further
+//    out and at least L * (b / |dst - src|) deeper, so
+//    ratio >= (delta + L) / (apex - b - L * b / delta).
+// Both are applied to single offsets and to 4x4, 8x8 and 32x32 groups of offsets. Float error
+// of the listing's march is accounted for by slack terms; the argument is in docs/cone_maps.md
+// ("Exact pruning of the Listing").
 #include <algorithm>
 #include <bit>
 #include <cmath>
@@ -151,12 +153,13 @@ double RelaxedTileLowerBound(int64_t minS, double scale, float src, float dminTi
 
 namespace {
 
-/// Bounds on where the listing's float march can stop, and the exit field: per texel t and
-/// sector k, L[t * 8 + k] <= the uv distance from t's centre to every cell that is strictly
-/// deeper than t and whose eps-dilation meets the closed wedge k at t's centre (cells beyond
-/// the searched window count as being at the window's edge).
+/// Bounds on where the listing's float march can stop, and the exit field: per texel t (depth
+/// b) and sector k, L[t * kSectors + k] <= the uv distance from t's centre to every cell deeper
+/// than t(b) = fl(b + fl(fl(1 - b) / steps)) (the march's z after its first step) whose
+/// eps-dilation meets the closed wedge k at t's centre (cells beyond the searched window count
+/// as being at the window's edge; +inf when no cell is deeper than t(b)).
 struct ExitField {
-    double eps = 0;  ///< uv: march points lie within eps of the exact ray (see ExitSlack)
+    double eps = 0;  ///< uv: march points lie within eps of the exact ray (MakeExitFieldSlack)
     double eta = 0;  ///< depth: accumulated rounding of the march's z
     bool usable = false;
     // Stored as the upper 16 bits of the float (bfloat16 truncated: never larger, so still a
@@ -175,7 +178,6 @@ std::vector<uint16_t> PackAll(const std::vector<float>& v) {
     for (size_t i = 0; i < v.size(); ++i) out[i] = PackDown(v[i]);
     return out;
 }
-
 
 /// eps covers, for a march point E whose ratio is < 1 (so |E - src| < 1 and |E| < 2): the float
 /// source and destination positions (< 2^-23 per coordinate) and the accumulation of up to
