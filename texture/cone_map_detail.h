@@ -228,9 +228,11 @@ double RelaxedTileLowerBound(int64_t minS, double scale, float src, float dminTi
 
 /// Listing 18-1/18-2 relaxed map (texture/cone_map_relaxed.cpp): outKind Relaxed (ratios),
 /// ConeNormal (n_z of the ratio) or Stacked (p.stackedCount channels, apex StackedApex).
-/// brute = every pair, no pruning (the oracle); otherwise the exact pruned search.
+/// brute = every pair, no pruning (the oracle); otherwise the exact pruned search, which uses
+/// the exit-field bound where its float argument holds (maps up to ~2040 texels a side at 4096
+/// steps, ~58,000 at 128); exitField = false forces the search without it (tests).
 ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool brute,
-                          ConeKind outKind);
+                          ConeKind outKind, bool exitField = true);
 
 /// Apex depth of stacked cone k of K: d * (K - k) / K (k = 0: the surface point).
 inline float StackedApex(float d, int k, int K) { return d * (float(K - k) / float(K)); }

@@ -248,8 +248,9 @@ struct ExitTile {
     SectorBits mask;
 };
 
-ExitField BuildExitField(const HeightField& hf, int steps, float inv) {
+ExitField BuildExitField(const HeightField& hf, int steps, float inv, bool wanted) {
     ExitField f = MakeExitFieldSlack(hf, steps);
+    f.usable = f.usable && wanted;
     if (!f.usable) return f;
     const int W = hf.width, H = hf.height;
     const size_t N = size_t(W) * size_t(H);
@@ -399,7 +400,7 @@ enum class RelaxedOut { Ratio, ConeNormal, Stacked };
 }  // namespace
 
 ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool brute,
-                          ConeKind outKind) {
+                          ConeKind outKind, bool exitField) {
     const float dmin = CheckedMinDepth(hf);
     if (hf.width > (1 << 20) || hf.height > (1 << 20))
         throw Error("height map \"" + hf.name + "\": " + std::to_string(hf.width) + "x" +
@@ -453,7 +454,7 @@ ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool br
         win4 = WindowMinima(d, W, H, 1, 4);
     }
     const float inv = PowerOfTwoInverse(p.searchSteps);
-    const ExitField ef = BuildExitField(hf, p.searchSteps, inv);
+    const ExitField ef = BuildExitField(hf, p.searchSteps, inv, exitField);
     std::vector<RelaxedOffset> offs;
     offs.reserve(to.offsets.size());
     std::vector<RelaxedTile> tiles(to.tiles.size());

@@ -12,6 +12,7 @@
 #include <iostream>
 
 #include "core/error.h"
+#include "texture/cone_map_detail.h"
 #include "texture/image_io.h"
 #include "texture/map_cache.h"
 #include "texture/mip_pyramid.h"
@@ -187,6 +188,21 @@ TEST(ConeMap, RelaxedVariantsMatchTheirBruteForce) {
         EXPECT_EQ(fast.channels, k == ConeKind::Stacked ? 3 : 1);
         ExpectBitEqual(fast, GenerateConeMapBruteForce(hf, k, p),
                        "relaxed " + std::string(ToString(k)));
+    }
+}
+
+TEST(ConeMap, RelaxedSearchWithoutExitFieldMatchesBruteForce) {
+    // Large maps with many steps (e.g. > 2040 texels a side at 4096 steps) search without the
+    // exit-field bound; the same code path, forced on small maps.
+    ConeMapParams p;
+    p.searchSteps = 64;
+    for (const HeightField& hf : {QuantizeToUnorm8(MakeBuiltinMap("shapes", 40, 40)),
+                                  RandomField(32, 24, 17, true)}) {
+        const ConeMap brute = GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p);
+        ExpectBitEqual(detail::RelaxedListingMap(hf, p, false, ConeKind::Relaxed, false), brute,
+                       hf.name + " without exit field");
+        ExpectBitEqual(detail::RelaxedListingMap(hf, p, false, ConeKind::Relaxed, true), brute,
+                       hf.name + " with exit field");
     }
 }
 
