@@ -2,6 +2,7 @@
 #include "texture/cone_map.h"
 
 #include <array>
+#include <bit>
 #include <cmath>
 #include <numeric>
 #include <sstream>
@@ -129,8 +130,11 @@ float RoundDownStrict(double r) {
     float f = float(r);
     // Round down, then one more ulp when the float sits within double rounding of the value:
     // the stored ratio is then strictly below the exact real ratio (conservative).
-    if (double(f) > r) f = std::nextafter(f, 0.0f);
-    if (double(f) >= r * (1.0 - 1e-14) && f > 0.0f) f = std::nextafter(f, 0.0f);
+    // The next float toward 0 of a positive finite float is its bit pattern minus one (the
+    // same as std::nextafter(f, 0), without the library call).
+    auto down = [](float x) { return std::bit_cast<float>(std::bit_cast<uint32_t>(x) - 1u); };
+    if (double(f) > r) f = down(f);  // f > r >= 0, so f > 0
+    if (double(f) >= r * (1.0 - 1e-14) && f > 0.0f) f = down(f);
     return f;
 }
 
@@ -247,8 +251,11 @@ std::vector<float> WindowMin(const HeightField& hf) {
     return WindowMinima(hf.depth, hf.width, hf.height, 1, kTile);
 }
 
+/// Writes into `out` through `rows` (both resized, their storage reused: fresh pages are
+/// expensive on a VM, and the dynamic maps call this every frame).
 template <class T, class Op>
-std::vector<T> WindowReduce(const std::vector<T>& v, int W, int H, int C, int k, int step, Op op) {
+void WindowReduceInto(const std::vector<T>& v, int W, int H, int C, int k, int step, Op op,
+                      std::vector<T>& rows, std::vector<T>& out) {
     const size_t Cs = size_t(C);
     // One separable pass: along x (dx = 1) or y (dx = 0), k samples `step` apart, wrapped.
     auto pass = [&](const std::vector<T>& in, std::vector<T>& out, bool alongX) {
@@ -267,9 +274,16 @@ std::vector<T> WindowReduce(const std::vector<T>& v, int W, int H, int C, int k,
                     }
         });
     };
-    std::vector<T> rows(v.size()), out(v.size());
+    rows.resize(v.size());
+    out.resize(v.size());
     pass(v, rows, true);
     pass(rows, out, false);
+}
+
+template <class T, class Op>
+std::vector<T> WindowReduce(const std::vector<T>& v, int W, int H, int C, int k, int step, Op op) {
+    std::vector<T> rows, out;
+    WindowReduceInto(v, W, H, C, k, step, op, rows, out);
     return out;
 }
 
@@ -286,8 +300,10 @@ template std::vector<float> WindowMinima(const std::vector<float>&, int, int, in
 template std::vector<uint16_t> WindowMinima(const std::vector<uint16_t>&, int, int, int, int, int);
 
 void MakeSearchWindows(const HeightField& hf, SearchWindows& out) {
-    out.win8 = WindowMin(hf);
-    out.win32 = WindowMinima(out.win8, hf.width, hf.height, 1, kSuperTile, kTile);
+    auto mn = [](float a, float b) { return std::min(a, b); };
+    WindowReduceInto(hf.depth, hf.width, hf.height, 1, kTile, 1, mn, out.scratch, out.win8);
+    WindowReduceInto(out.win8, hf.width, hf.height, 1, kSuperTile, kTile, mn, out.scratch,
+                     out.win32);
 }
 
 float CheckedMinDepth(const HeightField& hf) {

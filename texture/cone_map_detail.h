@@ -106,7 +106,9 @@ std::vector<float> WindowMaxima(const std::vector<float>& v, int W, int H, int k
 /// Depth minima over the 8x8 and 32x32 windows starting at each texel (TiledSearch).
 struct SearchWindows {
     std::vector<float> win8, win32;
+    std::vector<float> scratch;  ///< reused between calls
 };
+/// Fills `out`, reusing its storage.
 void MakeSearchWindows(const HeightField& hf, SearchWindows& out);
 
 inline int Wrap(int i, int n) {
