@@ -247,9 +247,6 @@ TiledOffsets MakeTiledOffsets(const Geometry& g, ConeKind sectors) {
     return to;
 }
 
-std::vector<float> WindowMin(const HeightField& hf) {
-    return WindowMinima(hf.depth, hf.width, hf.height, 1, kTile);
-}
 
 /// Writes into `out` through `rows` (both resized, their storage reused: fresh pages are
 /// expensive on a VM, and the dynamic maps call this every frame).

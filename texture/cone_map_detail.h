@@ -87,9 +87,6 @@ TiledOffsets MakeTiledOffsets(const Geometry& g, ConeKind sectors);
 /// The same offsets in plain scan order (for brute force).
 std::vector<Offset> MakeOffsets(const Geometry& g, ConeKind sectors);
 
-/// win[j*W+i] = min depth over the 8x8 window starting at texel (i, j), wrapped.
-std::vector<float> WindowMin(const HeightField& hf);
-
 /// out[(j*W + i)*C + c] = min of v[(y*W + x)*C + c] over x = i + a*step, y = j + b*step,
 /// a, b in [0, k), wrapped (C interleaved channels). With v itself a window minimum of size
 /// `step`, the result is the window minimum of size k*step.
@@ -119,17 +116,22 @@ inline int Wrap(int i, int n) {
 /// Validates the field and returns min depth.
 float CheckedMinDepth(const HeightField& hf);
 
-/// best[k] = min(best[k], q) for the sectors k in mask; true when one improved.
-inline bool LowerSectors(uint8_t mask, double q, int nSectors, double* best) {
+/// best[k] = min(best[k], v) for the bits k of mask; true when one improved.
+template <class T>
+inline bool LowerMasked(unsigned mask, T v, T* best) {
     bool changed = false;
-    for (unsigned m = mask & ((1u << nSectors) - 1u); m; m &= m - 1) {
-        const int k = std::countr_zero(m);
-        if (q < best[k]) {
-            best[k] = q;
+    for (; mask; mask &= mask - 1) {
+        const int k = std::countr_zero(mask);
+        if (v < best[k]) {
+            best[k] = v;
             changed = true;
         }
     }
     return changed;
+}
+/// The same for the first nSectors sectors of a sector mask.
+inline bool LowerSectors(uint8_t mask, double q, int nSectors, double* best) {
+    return LowerMasked(mask & ((1u << nSectors) - 1u), q, best);
 }
 
 /// One blocker candidate: updates best[k] of the sectors in off.mask when the texel at the
@@ -217,16 +219,11 @@ inline bool IsLimiting(const HeightField& hf, int bx, int by, int dx, int dy) {
     return hf.At(nx, ny) > hf.At(bx, by);
 }
 
-/// Listing 18-2 for one (source, offset) pair in float (GPU) arithmetic; NaN-free: returns
-/// +inf for the destinations the listing ignores (depth 0 gives a NaN ratio there). With a
-/// finite `best` it may return `best` instead of marching when a float bound proves the listing's
-/// ratio >= best (so min(best, result) is unchanged; exact, see the comment in the body).
+/// Listing 18-2 for one (source, offset) pair in float (GPU) arithmetic, apex depth `apex`
+/// (the source depth for plain relaxed cones); NaN-free: returns +inf for the destinations the
+/// listing ignores (depth 0 gives a NaN ratio there). The brute force's evaluation.
 float RelaxedPairRatio(const HeightField& hf, int ti, int tj, int dx, int dy, int steps,
-                       float apex, float best = std::numeric_limits<float>::infinity());
-/// Lower bound (real numbers, with the float error of RelaxedPairRatio's bound accounted for)
-/// of that float bound over destinations at squared distance >= minS (geometry units) and
-/// depth >= dminTile < src. Valid for textures up to 2^20 texels a side.
-double RelaxedTileLowerBound(int64_t minS, double scale, float src, float dminTile);
+                       float apex);
 
 /// Listing 18-1/18-2 relaxed map (texture/cone_map_relaxed.cpp): outKind Relaxed (ratios),
 /// ConeNormal (n_z of the ratio) or Stacked (p.stackedCount channels, apex StackedApex).

@@ -62,9 +62,12 @@ constexpr int kSectors = 16;  ///< exit-field sectors: closed 22.5° wedges coun
 using SectorBits = uint16_t;
 constexpr SectorBits kAllSectors = 0xFFFF;
 
-}  // namespace
-
-namespace {
+/// One coordinate of the listing's forward step: v / steps (v * inv when steps is a power of
+/// two and inv = 1/steps, the same float). The exit field uses it too, so that its threshold
+/// is the march's z after the first step bit for bit.
+RS_INLINE float ListingStep(float v, int steps, float inv) {
+    return inv > 0.0f ? v * inv : v / float(steps);
+}
 
 /// The listing's float arithmetic for one pair, given the source position (sx, sy), the
 /// destination (dstx, dsty) and its sampled depth dstz. `inv` = 1/steps when steps is a power of
@@ -93,10 +96,8 @@ RS_INLINE float ListingRatio(const HeightField& hf, float sx, float sy, float ds
     vx *= scale;
     vy *= scale;
     vz *= scale;
-    const float fs = float(steps);
-    const float stx = inv > 0.0f ? vx * inv : vx / fs;
-    const float sty = inv > 0.0f ? vy * inv : vy / fs;
-    const float stz = inv > 0.0f ? vz * inv : vz / fs;
+    const float stx = ListingStep(vx, steps, inv), sty = ListingStep(vy, steps, inv),
+                stz = ListingStep(vz, steps, inv);
     float px = dstx + stx, py = dsty + sty, pz = dstz + stz;
     if (pz >= src) return 1.0f;
     const double best2 = double(best) * double(best) * (1.0 + 0x1p-20);
@@ -133,22 +134,12 @@ float PowerOfTwoInverse(int steps) {
 }  // namespace
 
 float RelaxedPairRatio(const HeightField& hf, int ti, int tj, int dx, int dy, int steps,
-                       float apex, float best) {
+                       float apex) {
     const float W = float(hf.width), H = float(hf.height);
     const float sx = (float(ti) + 0.5f) / W, sy = (float(tj) + 0.5f) / H;
     const float dstx = sx + float(dx) / W, dsty = sy + float(dy) / H;
     return ListingRatio(hf, sx, sy, dstx, dsty, NearestWrap(hf, dstx, dsty), steps, 0.0f, apex,
-                        best);
-}
-
-double RelaxedTileLowerBound(int64_t minS, double scale, float src, float dminTile) {
-    // |vx - dx/W| <= 3 * 2^-24 (three roundings of values below 2 in magnitude), so the float
-    // |v| >= uv distance - 2^-21 (sqrt 2 * 3 * 2^-24 < 2^-21); the float sqrt, products, sum,
-    // difference and division lose at most 2^-22 relatively. The slack 2^-20 used here also
-    // covers the double rounding of this expression.
-    const double dist = std::sqrt(double(minS)) / scale - 0x1p-20;
-    if (!(dist > 0)) return 0;
-    return dist * (1.0 - 0x1p-20) / ((double(src) - double(dminTile)) * (1.0 + 0x1p-20));
+                        kInfF);
 }
 
 namespace {
@@ -198,15 +189,14 @@ ExitField MakeExitFieldSlack(const HeightField& hf, int steps) {
 
 constexpr double kSectorAngle = 2 * std::numbers::pi / kSectors;
 
-/// Closed sectors within `tol` radians of the direction angle `a`.
-SectorBits AngleSectorMask(double a, double tol) {
+/// Closed sectors that meet the angle interval [lo, hi] (radians, any turn, hi - lo < 2 pi).
+SectorBits IntervalSectorMask(double lo, double hi) {
     constexpr double kPi = std::numbers::pi;
     SectorBits m = 0;
     for (int k = 0; k < kSectors; ++k) {
         const double s0 = k * kSectorAngle, s1 = (k + 1) * kSectorAngle;
         for (int w = -2; w <= 2; ++w)
-            if (a + 2 * kPi * w >= s0 - tol && a + 2 * kPi * w <= s1 + tol)
-                m |= SectorBits(1u << k);
+            if (lo + 2 * kPi * w <= s1 && hi + 2 * kPi * w >= s0) m |= SectorBits(1u << k);
     }
     return m;
 }
@@ -224,15 +214,7 @@ SectorBits RectSectorMask(double x0, double x1, double y0, double y1) {
             lo = std::min(lo, a);
             hi = std::max(hi, a);
         }
-    lo += mid - 1e-9;
-    hi += mid + 1e-9;
-    SectorBits m = 0;
-    for (int k = 0; k < kSectors; ++k) {
-        const double s0 = k * kSectorAngle, s1 = (k + 1) * kSectorAngle;
-        for (int w = -2; w <= 2; ++w)
-            if (lo + 2 * kPi * w <= s1 && hi + 2 * kPi * w >= s0) m |= SectorBits(1u << k);
-    }
-    return m;
+    return IntervalSectorMask(lo + mid - 1e-9, hi + mid + 1e-9);
 }
 
 /// The exit-field search window: offsets in [-R, R]^2 (unwrapped, texel units) in 8x8 tiles
@@ -297,8 +279,7 @@ ExitField BuildExitField(const HeightField& hf, int steps, float inv, bool wante
                 // A march from this texel stops only in a cell deeper than its z after the first
                 // step, fl(b + fl(fl(1 - b) / steps)) as the listing computes it (z only grows).
                 const float b = hf.At(i, j);
-                const float scale = 1.0f - b;
-                const float d = b + (inv > 0.0f ? scale * inv : scale / float(steps));
+                const float d = b + ListingStep(1.0f - b, steps, inv);
                 float* L = &Lf[(size_t(j) * size_t(W) + size_t(i)) * kSectors];
                 if (!(d < dmax)) continue;  // nothing is deeper: no cell can end a march
                 std::fill(L, L + kSectors, edge);
@@ -317,13 +298,7 @@ ExitField BuildExitField(const HeightField& hf, int steps, float inv, bool wante
                         const ExitOffset& off = offs[size_t(o)];
                         if (!(off.mask & open)) continue;
                         if (!(hf.At(Wrap(i + off.dx, W), Wrap(j + off.dy, H)) > d)) continue;
-                        for (unsigned mk = off.mask; mk; mk &= mk - 1) {
-                            const int k = std::countr_zero(mk);
-                            if (off.dist < L[k]) {
-                                L[k] = off.dist;
-                                changed = true;
-                            }
-                        }
+                        changed |= LowerMasked(unsigned(off.mask), off.dist, L);
                     }
                     if (changed) worst = *std::max_element(L, L + kSectors);
                 }
@@ -356,6 +331,14 @@ RS_INLINE bool ExitBoundPrunes(const ExitField& f, double dLo, double invD, doub
     return (dLo + lam - f.eps) * (1.0 - 0x1p-20) >= best * den;
 }
 
+/// The smallest exit-field value over the sectors of `mask` at texel (or window) t.
+inline float MinOverSectors(const std::vector<uint16_t>& field, size_t t, unsigned mask) {
+    float m = kInfF;
+    for (; mask; mask &= mask - 1)
+        m = std::min(m, Unpack(field[t * kSectors + size_t(std::countr_zero(mask))]));
+    return m;
+}
+
 /// One offset of the pruned search, with what its tests need.
 struct RelaxedOffset {
     double distLo;  ///< below the float distance bound (RelaxedTileLowerBound's margins)
@@ -374,11 +357,16 @@ struct RelaxedGroup {
     double dLo = 0;          ///< min exact distance
     double invD = 1;         ///< min invD (farthest offset)
     SectorBits mask = 0;     ///< union of the offsets' sectors
-    void Add(const RelaxedOffset& o) {
-        distLo = begin == end ? o.distLo : std::min(distLo, o.distLo);
-        dLo = begin == end ? o.dist : std::min(dLo, o.dist);
-        invD = std::min(invD, o.invD);
-        mask |= o.mask;
+    void Add(const RelaxedOffset& o) { Add(o.distLo, o.dist, o.invD, o.mask); }
+    /// Extends the bounds to a whole group (a tile into its super-tile); counts one member.
+    void Add(const RelaxedGroup& g) { Add(g.distLo, g.dLo, g.invD, g.mask); }
+
+private:
+    void Add(double lo, double d, double inv, SectorBits m) {
+        distLo = begin == end ? lo : std::min(distLo, lo);
+        dLo = begin == end ? d : std::min(dLo, d);
+        invD = std::min(invD, inv);
+        mask |= m;
         ++end;
     }
 };
@@ -387,14 +375,6 @@ struct RelaxedTile {
     RelaxedGroup quarter[4];
     int nx = 0, ny = 0;  ///< extent of its offsets
 };
-/// 4x4 tiles (32x32 offsets): `all` bounds them, [first, last) their range in the tile list.
-struct RelaxedSuperTile {
-    RelaxedGroup all;
-    int64_t minS = 0;
-    int first = 0, last = 0;
-};
-constexpr int kSuper = 4;  ///< tiles per super-tile side
-
 enum class RelaxedOut { Ratio, ConeNormal, Stacked };
 
 }  // namespace
@@ -447,12 +427,11 @@ ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool br
     // The offsets of the brute force, in 8x8 tiles sorted by distance, with their bounds;
     // inside a tile grouped by 4x4 quarter.
     const TiledOffsets to = MakeTiledOffsets(g, ConeKind::Cone);
-    const std::vector<float> win = WindowMin(hf);
-    std::vector<float> win4;
-    {
-        std::vector<float> d(hf.depth);
-        win4 = WindowMinima(d, W, H, 1, 4);
-    }
+    SearchWindows sw;  // depth minima over 8x8 and 32x32 windows, as the tiled search's
+    MakeSearchWindows(hf, sw);
+    const std::vector<float>& win = sw.win8;
+    const std::vector<float>& win32 = sw.win32;
+    const std::vector<float> win4 = WindowMinima(hf.depth, W, H, 1, 4);
     const float inv = PowerOfTwoInverse(p.searchSteps);
     const ExitField ef = BuildExitField(hf, p.searchSteps, inv, exitField);
     std::vector<RelaxedOffset> offs;
@@ -466,8 +445,11 @@ ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool br
             const Offset& off = to.offsets[size_t(o)];
             RelaxedOffset ro;
             ro.dist = std::sqrt(double(off.s)) / g.scale;
-            // distLo * (1 / (d - b)) is below RelaxedTileLowerBound(offset, d, b) by a margin
-            // that covers the double rounding of the product compared against it.
+            // distLo / (d - b) is below the listing's float distance bound fl|v| / (d - b):
+            // |vx - dx/W| <= 3 * 2^-24 (three roundings of values below 2), so fl|v| >= dist -
+            // 2^-21, and the float sqrt, products, sum, difference and division lose at most
+            // 2^-22 relatively; the 2^-20 and 2^-19 slacks also cover the double rounding of
+            // the product distLo is compared against (best * (d - b)).
             ro.distLo = std::max(0.0, ro.dist - 0x1p-20) * (1.0 - 0x1p-19);
             ro.invD = (1.0 - 0x1p-20) * (1.0 - 0x1p-40) / (ro.dist + 0x1p-21);
             ro.dx = off.dx;
@@ -481,8 +463,9 @@ ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool br
             // 2^-22 / |offset| of the exact angle; the per-component scaling and rounding of
             // the step keep weak inequalities between x, y and 0, and every sector boundary
             // that matters here is of that kind only up to this tolerance.
-            ro.mask = AngleSectorMask(std::atan2(double(off.dy) / H, double(off.dx) / W),
-                                      0x1p-22 / ro.dist + 1e-12);
+            const double angle = std::atan2(double(off.dy) / H, double(off.dx) / W);
+            const double tol = 0x1p-22 / ro.dist + 1e-12;
+            ro.mask = IntervalSectorMask(angle - tol, angle + tol);
             rt.nx = std::max(rt.nx, int(ro.lx) + 1);
             rt.ny = std::max(rt.ny, int(ro.ly) + 1);
             q[(ro.lx >= 4 ? 1 : 0) + (ro.ly >= 4 ? 2 : 0)].push_back(ro);
@@ -502,52 +485,18 @@ ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool br
             }
         }
     }
-    // Super-tiles: the tiles regrouped by 32x32 window, each group sorted by distance, the
-    // groups sorted by their nearest offset. Any order of evaluation gives the same minimum.
-    std::vector<RelaxedSuperTile> supers;
-    {
-        struct Key { int sx, sy; size_t tile; };
-        std::vector<Key> keys;
-        for (size_t ti = 0; ti < tiles.size(); ++ti)
-            keys.push_back({(tiles[ti].all.ox + g.halfX) / (kTile * kSuper),
-                            (tiles[ti].all.oy + g.halfY) / (kTile * kSuper), ti});
-        std::stable_sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
-            return a.sy != b.sy ? a.sy < b.sy : a.sx < b.sx;
-        });  // tiles keep their distance order inside a group
-        std::vector<RelaxedTile> ordered;
-        ordered.reserve(tiles.size());
-        for (size_t k = 0; k < keys.size();) {
-            RelaxedSuperTile st;
-            st.first = int(ordered.size());
-            st.all.ox = -g.halfX + keys[k].sx * kTile * kSuper;
-            st.all.oy = -g.halfY + keys[k].sy * kTile * kSuper;
-            st.minS = std::numeric_limits<int64_t>::max();
-            const size_t k0 = k;
-            for (; k < keys.size() && keys[k].sx == keys[k0].sx && keys[k].sy == keys[k0].sy; ++k) {
-                const RelaxedTile& t = tiles[keys[k].tile];
-                ordered.push_back(t);
-                st.minS = std::min(st.minS, to.tiles[keys[k].tile].minS);
-                const RelaxedGroup& a = t.all;
-                st.all.distLo = st.all.begin == st.all.end ? a.distLo : std::min(st.all.distLo, a.distLo);
-                st.all.dLo = st.all.begin == st.all.end ? a.dLo : std::min(st.all.dLo, a.dLo);
-                st.all.invD = std::min(st.all.invD, a.invD);
-                st.all.mask |= a.mask;
-                ++st.all.end;
-            }
-            st.last = int(ordered.size());
-            supers.push_back(st);
-        }
-        tiles.swap(ordered);
-        std::stable_sort(supers.begin(), supers.end(),
-                         [](const RelaxedSuperTile& a, const RelaxedSuperTile& b) { return a.minS < b.minS; });
+    // Bounds of the 32x32 super-tiles of the tiled offsets (to.supers, sorted by distance;
+    // their tiles sorted by distance inside). Any order of evaluation gives the same minimum.
+    std::vector<RelaxedGroup> superBounds(to.supers.size());
+    for (size_t si = 0; si < to.supers.size(); ++si) {
+        const OffsetSuperTile& st = to.supers[si];
+        RelaxedGroup& sb = superBounds[si];
+        sb.ox = st.ox;
+        sb.oy = st.oy;
+        for (int x = st.first; x < st.last; ++x) sb.Add(tiles[size_t(to.superOrder[size_t(x)])].all);
     }
-    std::vector<float> win32;
-    {
-        std::vector<float> w8(win);
-        win32 = WindowMinima(w8, W, H, 1, kSuper, kTile);
-    }
-    // Pruning is exact (RelaxedPairRatio's float bound, RelaxedTileLowerBound below it for
-    // whole tiles, and the exit bound): a pair is skipped only when its listing ratio provably
+    // Pruning is exact (the distance bound below the listing's float bound, for offsets and
+    // whole groups, and the exit bound): a pair is skipped only when its listing ratio provably
     // cannot lower the running minimum; ties do not change it either (strict "<" as in the
     // listing), so the minimum equals the brute force's for any order of evaluation.
     ProgressCounter progress(p.progress, H);
@@ -593,22 +542,22 @@ ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool br
                     if (!(wmin < apex)) return true;
                     if (q.distLo >= double(best) * (dApex - double(wmin))) return true;
                     if (!ef.usable) return false;
-                    float lt = kInfF;
-                    for (unsigned mk = q.mask; mk; mk &= mk - 1)
-                        lt = std::min(lt, Unpack(lwin[w * kSectors + size_t(std::countr_zero(mk))]));
-                    return ExitBoundPrunes(ef, q.dLo, q.invD, double(wmin), double(lt), dApex,
+                    return ExitBoundPrunes(ef, q.dLo, q.invD, double(wmin),
+                                           double(MinOverSectors(lwin, w, q.mask)), dApex,
                                            double(best));
                 };
                 const double reachAll = dApex - double(dmin);
-                for (const RelaxedSuperTile& st : supers) {
-                  if (st.all.distLo >= double(best) * reachAll) break;  // sorted by distance
+                for (size_t si = 0; si < to.supers.size(); ++si) {
+                  const OffsetSuperTile& st = to.supers[si];
+                  const RelaxedGroup& sb = superBounds[si];
+                  if (sb.distLo >= double(best) * reachAll) break;  // sorted by distance
                   {
-                    const size_t ws = size_t(WrapNear(j + st.all.oy, H)) * size_t(W) +
-                                      size_t(WrapNear(i + st.all.ox, W));
-                    if (groupPrunes(st.all, ws, win32[ws], ef.Lwin32)) continue;
+                    const size_t ws = size_t(WrapNear(j + sb.oy, H)) * size_t(W) +
+                                      size_t(WrapNear(i + sb.ox, W));
+                    if (groupPrunes(sb, ws, win32[ws], ef.Lwin32)) continue;
                   }
-                  for (int tIndex = st.first; tIndex < st.last; ++tIndex) {
-                    const RelaxedTile& t = tiles[size_t(tIndex)];
+                  for (int x = st.first; x < st.last; ++x) {
+                    const RelaxedTile& t = tiles[size_t(to.superOrder[size_t(x)])];
                     if (t.all.distLo >= double(best) * reachAll) break;  // sorted by distance
                     const int wx = WrapNear(i + t.all.ox, W), wy = WrapNear(j + t.all.oy, H);
                     const size_t w0 = size_t(wy) * size_t(W) + size_t(wx);
@@ -633,9 +582,7 @@ ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool br
                             const double db = double(b);
                             if (!(b < apex) || off.distLo >= double(best) * (dApex - db)) continue;
                             if (ef.usable) {
-                                float lp = kInfF;
-                                for (unsigned mk = off.mask; mk; mk &= mk - 1)
-                                    lp = std::min(lp, Unpack(ef.L[dst * kSectors + size_t(std::countr_zero(mk))]));
+                                const float lp = MinOverSectors(ef.L, dst, off.mask);
                                 // One step of the march is |v| (1 - b) / (b steps) long (float
                                 // roundings of v, the scale and the step within the factors).
                                 if (!(b > 0.0f)) continue;  // the listing gives NaN: ignored
