@@ -38,9 +38,9 @@ struct MapsOptions {
 void Status(const char* msg) {
     if (::isatty(2)) std::fprintf(stderr, "\r[maps] %-60s", msg);
 }
-/// A progress bar on stderr when it is a terminal: "[maps] generating  42% [########    ]".
+/// The progress bar on stderr, "[maps] generating  42% [########    ]" (installed only when
+/// stderr is a terminal).
 void ProgressBar(double fraction) {
-    if (!::isatty(2)) return;
     const int width = 30, filled = int(fraction * width + 0.5);
     std::fprintf(stderr, "\r[maps] generating %3d%% [%s%s]", int(fraction * 100 + 0.5),
                  std::string(size_t(filled), '#').c_str(),
