@@ -28,6 +28,17 @@ void BM_ConeMapRelaxed(benchmark::State& state) {
 }
 BENCHMARK(BM_ConeMapRelaxed)->Arg(128)->Arg(256)->Arg(512)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 
+void BM_ConeMapOtherKinds512(benchmark::State& state) {
+    // The kinds without an issue target, 8-bit `shapes` 512² (docs/cone_maps.md, Performance).
+    static constexpr ConeKind kKinds[] = {ConeKind::Acm8, ConeKind::RelaxedExact, ConeKind::Stacked,
+                                          ConeKind::Quad};
+    const ConeKind kind = kKinds[state.range(0)];
+    const HeightField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 512, 512));
+    for (auto _ : state) benchmark::DoNotOptimize(GenerateConeMap(hf, kind));
+    state.SetLabel(std::string(ToString(kind)));
+}
+BENCHMARK(BM_ConeMapOtherKinds512)->DenseRange(0, 3)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+
 void BM_Acm4PlainSearch(benchmark::State& state) {
     const HeightField hf = QuantizeToUnorm8(MakeBuiltinMap(kMaps[state.range(0)], 256, 256));
     for (auto _ : state) benchmark::DoNotOptimize(GenerateSectorMapPlainSearch(hf, ConeKind::Acm4));
