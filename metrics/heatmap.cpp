@@ -9,12 +9,11 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <memory>
 #include <set>
-#include <system_error>
 
 #include "core/error.h"
+#include "core/output_set.h"
 
 namespace OIIO = OIIO_NAMESPACE;
 
@@ -32,39 +31,29 @@ constexpr const char* kChannelOrderAttr = "reliefsim:channelOrder";
 
 std::string Quote(const std::string& s) { return "\"" + s + "\""; }
 
-/// Writes through `write(tmpPath)` and renames the result onto `path`. On any failure
-/// the temporary file is removed and Error is thrown, so `path` is either the complete
-/// new file or untouched. `write` returns an empty string on success, else the reason.
+/// Writes `path` through `write(tempPath)`, staged in `outputs` (committed by the caller
+/// with the rest of its files) or, when null, in a set of its own committed here. Errors
+/// name `path`, never the temporary. `write` returns an empty string on success, else the
+/// reason.
 template <typename WriteFn>
-void AtomicWrite(const std::string& what, const std::string& path, WriteFn&& write) {
-    const std::string tmpPath = path + ".tmp";
-    std::error_code ec;
-    const std::string reason = write(tmpPath);
-    if (!reason.empty()) {
-        std::filesystem::remove(tmpPath, ec);
-        throw Error(what + " " + Quote(path) + ": cannot write (" + reason +
-                    "); expected a writable file in an existing directory; hint: create "
-                    "the output directory first");
-    }
-    std::filesystem::rename(tmpPath, path, ec);
-    if (ec) {
-        std::error_code ignored;
-        std::filesystem::remove(tmpPath, ignored);
-        throw Error(
-            what + " " + Quote(path) + ": cannot rename " + Quote(tmpPath) +
-            " onto it (" + ec.message() +
-            "); expected a writable destination; hint: check that the path is not "
-            "a directory");
-    }
+void WriteStaged(const std::string& what, const std::string& path, OutputSet* outputs,
+                 WriteFn&& write) {
+    OutputSet own(what);
+    OutputSet& set = outputs ? *outputs : own;
+    const std::string reason = write(set.Add(path));
+    if (!reason.empty())
+        throw Error(what + " " + Quote(path) + ": cannot write (" + set.UserFacing(reason) +
+                    "); nothing was written; hint: check the free space");
+    if (!outputs) own.Commit();
 }
 
-/// Writes float pixels (spec.nchannels interleaved, row 0 at the top) to `tmpPath` in the
+/// Writes float pixels (spec.nchannels interleaved, row 0 at the top) to `tempPath` in the
 /// given OIIO format, converting to spec.format. Returns "" on success, else the reason.
-std::string WriteImageFile(const std::string& tmpPath, const char* format,
+std::string WriteImageFile(const std::string& tempPath, const char* format,
                            const OIIO::ImageSpec& spec, const float* pixels) {
     auto out = OIIO::ImageOutput::create(format);
     if (!out) return "no " + std::string(format) + " writer: " + OIIO::geterror();
-    if (!out->open(tmpPath, spec)) {
+    if (!out->open(tempPath, spec)) {
         std::string err = out->geterror();
         return err.empty() ? OIIO::geterror() : err;
     }
@@ -295,7 +284,7 @@ std::vector<float> MapColors(const std::string& path, const float* values,
 }  // namespace
 
 void WriteHeatmapPng(const std::string& path, const float* values, const uint8_t* mask,
-                     int width, int height, const HeatmapScale& scale) {
+                     int width, int height, const HeatmapScale& scale, OutputSet* outputs) {
     CheckSize("heatmap", path, width, height);
     if (!values)
         throw Error("heatmap " + Quote(path) + ": values is null; expected data");
@@ -395,23 +384,24 @@ void WriteHeatmapPng(const std::string& path, const float* values, const uint8_t
     spec.attribute("reliefsim:max", maxText);
     spec.attribute("reliefsim:colormap", scale.colormap);
     spec.attribute("reliefsim:label", scale.label);
-    AtomicWrite("heatmap", path, [&](const std::string& tmpPath) {
-        return WriteImageFile(tmpPath, "png", spec, canvas.px.data());
+    WriteStaged("heatmap", path, outputs, [&](const std::string& tempPath) {
+        return WriteImageFile(tempPath, "png", spec, canvas.px.data());
     });
 }
 
-void WriteColorPng(const std::string& path, const float* rgb, int width, int height) {
+void WriteColorPng(const std::string& path, const float* rgb, int width, int height,
+                   OutputSet* outputs) {
     CheckSize("color png", path, width, height);
     if (!rgb) throw Error("color png " + Quote(path) + ": rgb is null; expected data");
     const OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-    AtomicWrite("color png", path, [&](const std::string& tmpPath) {
-        return WriteImageFile(tmpPath, "png", spec, rgb);
+    WriteStaged("color png", path, outputs, [&](const std::string& tempPath) {
+        return WriteImageFile(tempPath, "png", spec, rgb);
     });
 }
 
 void WriteMultiChannelExr(const std::string& path, int width, int height,
                           const std::vector<std::string>& channelNames,
-                          const std::vector<const float*>& planes) {
+                          const std::vector<const float*>& planes, OutputSet* outputs) {
     CheckSize("exr", path, width, height);
     if (channelNames.empty() || channelNames.size() != planes.size())
         throw Error("exr " + Quote(path) + ": " + std::to_string(channelNames.size()) +
@@ -440,8 +430,11 @@ void WriteMultiChannelExr(const std::string& path, int width, int height,
     spec.alpha_channel = -1;  // a channel named "A" is data here, not coverage
     spec.attribute("compression", "zip");
     spec.attribute(kChannelOrderAttr, order);
-    AtomicWrite("exr", path, [&](const std::string& tmpPath) {
-        return WriteImageFile(tmpPath, "openexr", spec, interleaved.data());
+    // OpenImageIO stamps EXRs with the current time unless DateTime is set; an empty value
+    // writes none, so the same record gives the same bytes on every run.
+    spec.attribute("DateTime", "");
+    WriteStaged("exr", path, outputs, [&](const std::string& tempPath) {
+        return WriteImageFile(tempPath, "openexr", spec, interleaved.data());
     });
 }
 

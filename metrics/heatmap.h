@@ -7,6 +7,8 @@
 
 namespace reliefsim {
 
+class OutputSet;
+
 /// How values become colours in WriteHeatmapPng. The range is fixed and explicit: a value
 /// v maps to t = clamp((v - min) / (max - min), 0, 1) and then through the colormap.
 /// Images are never normalised on their own, so two heatmaps written with the same scale
@@ -47,25 +49,30 @@ struct HeatmapScale {
 ///    ("reliefsim:min" and "reliefsim:max" as %.9g text, "reliefsim:colormap",
 ///    "reliefsim:label").
 ///
-/// The file is written to path + ".tmp" and renamed onto `path`, so no partial file is
-/// left behind. Throws Error (naming the path) for bad arguments, an unknown colormap or
-/// a failed write.
+/// The file is written to a temporary beside `path` and renamed onto it (core/output_set.h),
+/// so no partial file is left behind. With `outputs`, the file is staged in that set
+/// instead and appears only when the caller commits the set. Throws Error (naming the
+/// path) for bad arguments, an unknown colormap or a failed write.
 void WriteHeatmapPng(const std::string& path, const float* values, const uint8_t* mask,
-                     int width, int height, const HeatmapScale& scale);
+                     int width, int height, const HeatmapScale& scale,
+                     OutputSet* outputs = nullptr);
 
 /// Writes an RGB 8-bit PNG of an already coloured image: `rgb` holds width x height
 /// pixels of 3 floats in [0, 1] (clamped; row-major, row 0 at the top). Same atomic-write
 /// and error rules as WriteHeatmapPng.
-void WriteColorPng(const std::string& path, const float* rgb, int width, int height);
+void WriteColorPng(const std::string& path, const float* rgb, int width, int height,
+                   OutputSet* outputs = nullptr);
 
 /// Writes a float32 OpenEXR with one named channel per plane (zip compression). Each
 /// plane holds width x height floats, row-major, row 0 at the top. Names must be
 /// non-empty, unique and contain no newline. EXR files store channels sorted by name; the
 /// given order is kept in the "reliefsim:channelOrder" attribute, and ReadMultiChannelExr
-/// restores it. Same atomic-write and error rules as WriteHeatmapPng.
+/// restores it. No time stamp is written, so equal inputs give byte-identical files. Same
+/// atomic-write and error rules as WriteHeatmapPng.
 void WriteMultiChannelExr(const std::string& path, int width, int height,
                           const std::vector<std::string>& channelNames,
-                          const std::vector<const float*>& planes);
+                          const std::vector<const float*>& planes,
+                          OutputSet* outputs = nullptr);
 
 /// The contents of a multi-channel EXR: planes[i] (width x height floats, row 0 at the
 /// top) is the channel called names[i].

@@ -13,6 +13,8 @@
 
 namespace reliefsim {
 
+class OutputSet;
+
 /// Which derived map. Sector order of the multi-channel kinds is fixed (docs/cone_maps.md):
 ///   Quad : +x, -x, +y, -y (QDCSM half planes: channel +x bounds blockers with du > 0, ...)
 ///   Acm4 : closed quadrants counter-clockwise from +u: [0°,90°], [90°,180°], [180°,270°], [270°,360°]
@@ -158,8 +160,10 @@ std::string ConeMapStatsJson(const ConeMap& m, const ConeMapStats& s, ConeEncodi
 
 /// Writes the map: ".exr" float (one channel per ratio, names from ChannelNames), ".png" 8-bit
 /// (channels 1..4; Acm8 as two 4-channel halves side by side, as 000 §II-D). Atomic: written to
-/// a temporary name and renamed. Throws Error.
-void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc);
+/// a temporary beside `path` and renamed (core/output_set.h); with `outputs`, staged in that
+/// set until the caller commits it (a map and its statistics together). Throws Error.
+void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc,
+                  OutputSet* outputs = nullptr);
 
 /// Loads a cone map made elsewhere (e.g. GPU Gems 3 "*_cone.tga": ratio linear in B, 8 bit).
 /// channel: 0..3 = R,G,B,A; -1 = all four (Quad: R,G,B,A = +x,-x,+y,-y). The size must equal

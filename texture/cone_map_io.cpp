@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <unistd.h>
 
 #include "core/error.h"
 #include "texture/cone_map.h"
@@ -17,14 +16,6 @@ namespace OIIO = OIIO_NAMESPACE;
 
 namespace {
 
-std::string TempName(const std::string& path) {
-    const std::filesystem::path p(path);
-    const std::filesystem::path dir = p.has_parent_path() ? p.parent_path() : ".";
-    return (dir / ("." + p.stem().string() + ".tmp" + std::to_string(::getpid()) +
-                   p.extension().string()))
-        .string();
-}
-
 std::string Lower(std::string s) {
     for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
     return s;
@@ -32,45 +23,40 @@ std::string Lower(std::string s) {
 
 }  // namespace
 
-void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc) {
+void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc,
+                  OutputSet* outputs) {
     const std::string ext = Lower(std::filesystem::path(path).extension().string());
     if (ext != ".exr" && ext != ".png")
         throw Error("--out \"" + path + "\": unsupported extension; expected .exr (float) or .png (8-bit)");
-    const std::string tmp = TempName(path);
-    try {
-        if (ext == ".exr") {
-            const ConeMap q = QuantizeConeMap(m, enc);
-            WriteFloatImage(tmp, m.width, m.height, m.channels, q.values.data(),
-                            ChannelNames(m.kind));
-        } else {
-            const ConeEncoding e8 = enc == ConeEncoding::U8Sqrt ? ConeEncoding::U8Sqrt : ConeEncoding::U8;
-            std::vector<uint16_t> codes;
-            QuantizeConeMap(m, e8, &codes);
-            if (m.channels == 8) {  // two RGBA halves side by side (000 §II-D)
-                std::vector<uint8_t> px(size_t(m.width) * 2 * size_t(m.height) * 4);
-                for (int j = 0; j < m.height; ++j)
-                    for (int i = 0; i < m.width; ++i)
-                        for (int c = 0; c < 8; ++c) {
-                            const int x = i + (c / 4) * m.width;
-                            px[(size_t(j) * size_t(2 * m.width) + size_t(x)) * 4 + size_t(c % 4)] =
-                                uint8_t(codes[(size_t(j) * size_t(m.width) + size_t(i)) * 8 + size_t(c)]);
-                        }
-                WriteRgb8Image(tmp, 2 * m.width, m.height, 4, px.data());
-            } else if (m.channels <= 4) {
-                std::vector<uint8_t> px(codes.size());
-                for (size_t i = 0; i < codes.size(); ++i) px[i] = uint8_t(codes[i]);
-                WriteRgb8Image(tmp, m.width, m.height, m.channels, px.data());
-            } else {
-                throw Error("--out \"" + path + "\": " + std::to_string(m.channels) +
-                            " channels do not fit a PNG; use .exr");
-            }
-        }
-        std::filesystem::rename(tmp, path);
-    } catch (...) {
-        std::error_code ec;
-        std::filesystem::remove(tmp, ec);
-        throw;
+    // The image writers stage the file (in `outputs`, or on their own), so a failure
+    // leaves nothing behind.
+    if (ext == ".exr") {
+        const ConeMap q = QuantizeConeMap(m, enc);
+        WriteFloatImage(path, m.width, m.height, m.channels, q.values.data(),
+                        ChannelNames(m.kind), outputs);
+        return;
     }
+    if (m.channels > 4 && m.channels != 8)
+        throw Error("--out \"" + path + "\": " + std::to_string(m.channels) +
+                    " channels do not fit a PNG; use .exr");
+    const ConeEncoding e8 = enc == ConeEncoding::U8Sqrt ? ConeEncoding::U8Sqrt : ConeEncoding::U8;
+    std::vector<uint16_t> codes;
+    QuantizeConeMap(m, e8, &codes);
+    if (m.channels == 8) {  // two RGBA halves side by side (000 §II-D)
+        std::vector<uint8_t> px(size_t(m.width) * 2 * size_t(m.height) * 4);
+        for (int j = 0; j < m.height; ++j)
+            for (int i = 0; i < m.width; ++i)
+                for (int c = 0; c < 8; ++c) {
+                    const int x = i + (c / 4) * m.width;
+                    px[(size_t(j) * size_t(2 * m.width) + size_t(x)) * 4 + size_t(c % 4)] =
+                        uint8_t(codes[(size_t(j) * size_t(m.width) + size_t(i)) * 8 + size_t(c)]);
+                }
+        WriteRgb8Image(path, 2 * m.width, m.height, 4, px.data(), outputs);
+        return;
+    }
+    std::vector<uint8_t> px(codes.size());
+    for (size_t i = 0; i < codes.size(); ++i) px[i] = uint8_t(codes[i]);
+    WriteRgb8Image(path, m.width, m.height, m.channels, px.data(), outputs);
 }
 
 ConeMap LoadExternalConeMap(const std::string& path, ConeKind kind, int channel,

@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "core/error.h"
+#include "core/output_set.h"
 #include "texture/procedural.h"
 
 namespace reliefsim {
@@ -94,24 +95,50 @@ HeightField LoadHeightMap(const std::string& spec, const MapLoadOptions& options
     return LoadHeightMapFile(spec, options);
 }
 
+namespace {
+
+/// Writes pixels of `type` to `path` through OpenImageIO (format by extension), staged in
+/// `outputs` or, when null, in a set of its own committed here (core/output_set.h).
+void WriteImage(const std::string& path, OIIO::ImageSpec spec, OIIO::TypeDesc type,
+                const void* pixels, OutputSet* outputs) {
+    // EXR and TIFF writers stamp the current time unless DateTime is set; an empty value
+    // writes none, so equal pixels give byte-identical files.
+    spec.attribute("DateTime", "");
+    OutputSet own;
+    OutputSet& set = outputs ? *outputs : own;
+    const std::string temp = set.Add(path);
+    bool ok = false;
+    std::string reason;
+    {  // the writer is destroyed, its file complete, before anything is renamed
+        auto out = OIIO::ImageOutput::create(path);
+        if (!out) {
+            reason = OIIO::geterror();
+        } else {
+            ok = out->open(temp, spec) && out->write_image(type, pixels) && out->close();
+            if (!ok) reason = out->geterror();
+        }
+    }
+    if (!ok)
+        throw Error("\"" + path + "\": cannot write image (" + set.UserFacing(reason) +
+                    "); nothing was written");
+    if (!outputs) own.Commit();
+}
+
+}  // namespace
+
 void WriteFloatImage(const std::string& path, int width, int height, int channels,
-                     const float* pixels, const std::vector<std::string>& channelNames) {
+                     const float* pixels, const std::vector<std::string>& channelNames,
+                     OutputSet* outputs) {
     OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::FLOAT);
     if (!channelNames.empty()) spec.channelnames = channelNames;
     spec.attribute("compression", "zip");
-    auto out = OIIO::ImageOutput::create(path);
-    if (!out || !out->open(path, spec) ||
-        !out->write_image(OIIO::TypeDesc::FLOAT, pixels) || !out->close())
-        throw Error("\"" + path + "\": cannot write image (" + OIIO::geterror() + ")");
+    WriteImage(path, spec, OIIO::TypeDesc::FLOAT, pixels, outputs);
 }
 
 void WriteRgb8Image(const std::string& path, int width, int height, int channels,
-                    const uint8_t* pixels) {
-    OIIO::ImageSpec spec(width, height, channels, OIIO::TypeDesc::UINT8);
-    auto out = OIIO::ImageOutput::create(path);
-    if (!out || !out->open(path, spec) ||
-        !out->write_image(OIIO::TypeDesc::UINT8, pixels) || !out->close())
-        throw Error("\"" + path + "\": cannot write image (" + OIIO::geterror() + ")");
+                    const uint8_t* pixels, OutputSet* outputs) {
+    WriteImage(path, OIIO::ImageSpec(width, height, channels, OIIO::TypeDesc::UINT8),
+               OIIO::TypeDesc::UINT8, pixels, outputs);
 }
 
 }  // namespace reliefsim

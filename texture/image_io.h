@@ -9,6 +9,8 @@
 
 namespace reliefsim {
 
+class OutputSet;
+
 enum class Channel { Auto, R, G, B, A };
 enum class Stores { Height, Depth };
 
@@ -30,12 +32,17 @@ HeightField LoadHeightMapFile(const std::string& path, const MapLoadOptions& opt
 HeightField LoadHeightMap(const std::string& spec, const MapLoadOptions& options);
 
 /// Writes a float image (1..n channels, row-major, interleaved) to path; format by extension.
-/// Channel names are used for EXR. Throws Error on failure.
+/// Channel names are used for EXR. No time stamp is written: equal pixels give equal bytes.
+/// The file appears complete or not at all: written to a temporary beside `path` and
+/// renamed (core/output_set.h); with `outputs`, staged in that set until the caller commits
+/// it. Throws Error naming `path` on failure.
 void WriteFloatImage(const std::string& path, int width, int height, int channels,
-                     const float* pixels, const std::vector<std::string>& channelNames = {});
+                     const float* pixels, const std::vector<std::string>& channelNames = {},
+                     OutputSet* outputs = nullptr);
 
-/// Writes 8-bit RGB(A) pixels (row-major, interleaved). Throws Error on failure.
+/// Writes 8-bit RGB(A) pixels (row-major, interleaved), like WriteFloatImage. Throws Error
+/// on failure.
 void WriteRgb8Image(const std::string& path, int width, int height, int channels,
-                    const uint8_t* pixels);
+                    const uint8_t* pixels, OutputSet* outputs = nullptr);
 
 }  // namespace reliefsim

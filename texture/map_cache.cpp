@@ -4,10 +4,10 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
+#include <string_view>
 #include <vector>
 
-#include "core/error.h"
+#include "core/output_set.h"
 #include "texture/procedural.h"
 
 namespace reliefsim {
@@ -95,8 +95,6 @@ std::optional<ConeMap> MapCache::Load(uint64_t key) const {
 }
 
 void MapCache::Store(uint64_t key, const ConeMap& m) const {
-    std::error_code ec;
-    std::filesystem::create_directories(dir_, ec);
     std::vector<char> bytes;
     auto wr = [&](const void* src, size_t n) {
         const char* s = static_cast<const char*>(src);
@@ -113,19 +111,9 @@ void MapCache::Store(uint64_t key, const ConeMap& m) const {
     wr(m.values.data(), m.values.size() * sizeof(float));
     const uint64_t sum = HashBytes(kMagic, bytes.data(), bytes.size());
     wr(&sum, 8);
-    const std::string path = PathFor(key);
-    const std::string tmp = path + ".tmp" + std::to_string(::getpid());
-    {
-        std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-        if (!f) throw Error("--cache-dir \"" + dir_ + "\": cannot write " + tmp);
-        f.write(bytes.data(), std::streamsize(bytes.size()));
-        if (!f) throw Error("--cache-dir \"" + dir_ + "\": write failed for " + tmp);
-    }
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) {
-        std::filesystem::remove(tmp, ec);
-        throw Error("--cache-dir \"" + dir_ + "\": cannot rename into " + path);
-    }
+    // A missing cache folder is created; the entry appears complete or not at all.
+    WriteFileAtomically(PathFor(key), std::string_view(bytes.data(), bytes.size()),
+                        "--cache-dir \"" + dir_ + "\"");
 }
 
 ConeMap MapCache::GetOrCreate(const HeightField& hf, ConeKind kind, const ConeMapParams& p,

@@ -7,12 +7,16 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "core/error.h"
@@ -215,7 +219,8 @@ TEST(Heatmap, ExrRoundTripsBitExactlyWithChannelNames) {
 
     const std::string path = dir + "/counters.exr";
     WriteMultiChannelExr(path, width, height, names, planes);
-    EXPECT_FALSE(fs::exists(path + ".tmp"));
+    for (const auto& e : fs::directory_iterator(dir))  // no temporary left beside it
+        EXPECT_EQ(e.path().filename(), "counters.exr") << e.path();
     const ExrPlanes read = ReadMultiChannelExr(path);
     EXPECT_EQ(read.width, width);
     EXPECT_EQ(read.height, height);
@@ -229,10 +234,13 @@ TEST(Heatmap, ExrRoundTripsBitExactlyWithChannelNames) {
     }
 }
 
-TEST(Heatmap, MissingDirectoryThrowsAndLeavesNoFile) {
-    const std::string dir = TestDir() + "/does/not/exist";
+TEST(Heatmap, UnwritablePathThrowsAndLeavesNoFile) {
+    const std::string dir = TestDir();
+    std::ofstream(dir + "/file") << "x";  // a file where a folder would have to be
+    fs::create_directory(dir + "/taken.exr");  // a folder where the file goes
     const float v = 1.0f;
-    const std::string png = dir + "/h.png", color = dir + "/c.png", exr = dir + "/e.exr";
+    const std::string png = dir + "/file/sub/h.png", color = dir + "/file/c.png",
+                      exr = dir + "/taken.exr";
     try {
         WriteHeatmapPng(png, &v, nullptr, 1, 1, HeatmapScale{});
         ADD_FAILURE() << "expected Error";
@@ -242,11 +250,34 @@ TEST(Heatmap, MissingDirectoryThrowsAndLeavesNoFile) {
     const float rgb[3] = {0.0f, 0.0f, 0.0f};
     EXPECT_THROW(WriteColorPng(color, rgb, 1, 1), Error);
     EXPECT_THROW(WriteMultiChannelExr(exr, 1, 1, {"v"}, {&v}), Error);
-    EXPECT_THROW(ReadMultiChannelExr(exr), Error);
-    for (const std::string& p : {png, color, exr}) {
-        EXPECT_FALSE(fs::exists(p)) << p;
-        EXPECT_FALSE(fs::exists(p + ".tmp")) << p;
-    }
+    EXPECT_THROW(ReadMultiChannelExr(dir + "/missing.exr"), Error);
+    // Nothing beside the two obstacles, no temporary.
+    std::vector<std::string> names;
+    for (const auto& e : fs::recursive_directory_iterator(dir))
+        names.push_back(fs::relative(e.path(), dir).string());
+    std::sort(names.begin(), names.end());
+    EXPECT_EQ(names, (std::vector<std::string>{"file", "taken.exr"}));
+}
+
+TEST(Heatmap, MissingFolderIsCreatedWithTheFile) {
+    const std::string dir = TestDir() + "/does/not/exist";
+    const float v = 1.0f;
+    WriteHeatmapPng(dir + "/h.png", &v, nullptr, 1, 1, HeatmapScale{});
+    EXPECT_TRUE(fs::is_regular_file(dir + "/h.png"));
+}
+
+TEST(Heatmap, ExrIsByteIdenticalAcrossWrites) {
+    // OpenImageIO would stamp the time (DateTime); two writes must give the same bytes.
+    const std::string dir = TestDir();
+    const std::vector<float> plane = {0.5f, 1.5f, -2.0f, 3.0f};
+    WriteMultiChannelExr(dir + "/a.exr", 2, 2, {"v"}, {plane.data()});
+    std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+    WriteMultiChannelExr(dir + "/b.exr", 2, 2, {"v"}, {plane.data()});
+    auto bytes = [](const std::string& p) {
+        std::ifstream f(p, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(f), {});
+    };
+    EXPECT_EQ(bytes(dir + "/a.exr"), bytes(dir + "/b.exr"));
 }
 
 TEST(Heatmap, BadScaleOrColormapThrowsWithValidChoices) {
