@@ -8,6 +8,7 @@
 
 #include "app/commands.h"
 #include "core/error.h"
+#include "core/output_set.h"
 #include "texture/cone_map.h"
 #include "texture/map_cache.h"
 #include "texture/mip_pyramid.h"
@@ -167,21 +168,20 @@ void Run(const MapsOptions& o) {
         // maxmip: max height = min depth; minmip: min height = max depth.
         const auto levels = BuildMipPyramid(hf.depth, hf.width, hf.height, 1,
                                             *kind == ConeKind::MaxMip ? MipReduce::Min : MipReduce::Max);
-        if (!o.out.empty() && !std::filesystem::path(o.out).parent_path().empty())
-            std::filesystem::create_directories(std::filesystem::path(o.out).parent_path());
-        for (size_t l = 0; l < levels.size(); ++l) {
+        for (size_t l = 0; l < levels.size(); ++l)
             std::printf("level %zu: %dx%d\n", l, levels[l].width, levels[l].height);
-            if (o.out.empty()) continue;
-            std::filesystem::path op(o.out);
-            const std::string path = (op.parent_path() / (op.stem().string() + "_L" +
-                                                          std::to_string(l) + op.extension().string()))
-                                         .string();
-            ConeMap m;
-            m.kind = *kind;
-            m.width = levels[l].width;
-            m.height = levels[l].height;
-            m.values = levels[l].values;
-            WriteConeMap(path, m, ConeEncoding::Float);
+        if (!o.out.empty()) {
+            // One MIP-mapped file with every level, created (with any missing folder) only
+            // once it is complete.
+            try {
+                CheckMipPyramidPath(o.out);
+            } catch (const Error& e) {
+                throw Error("--out " + std::string(e.what()));
+            }
+            OutputSet outputs("--out \"" + o.out + "\"");
+            WriteMipPyramidFile(o.out, levels, ToString(*kind), &outputs);
+            outputs.Commit();
+            std::printf("wrote %s (%zu MIP levels)\n", o.out.c_str(), levels.size());
         }
         return;
     }
