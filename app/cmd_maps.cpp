@@ -2,7 +2,6 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 #include <unistd.h>
 
@@ -50,17 +49,6 @@ void ProgressBar(double fraction) {
 }
 void StatusDone() {
     if (::isatty(2)) std::fprintf(stderr, "\r[maps] %-60s\n", "done");
-}
-
-void WriteTextAtomic(const std::string& path, const std::string& text) {
-    const std::string tmp = path + ".tmp" + std::to_string(::getpid());
-    {
-        std::ofstream f(tmp);
-        if (!f) throw Error("\"" + path + "\": cannot write");
-        f << text << "\n";
-        if (!f) throw Error("\"" + path + "\": write failed");
-    }
-    std::filesystem::rename(tmp, path);
 }
 
 std::string StatsPath(const std::string& out) {
@@ -204,15 +192,14 @@ void Run(const MapsOptions& o) {
     const ConeMapStats s = ComputeConeMapStats(stored, o.bins);
     PrintStats(stored, s);
     if (!o.out.empty()) {
-        // Only now, with the map in hand, create the folder: a failed run writes nothing.
-        const std::filesystem::path parent = std::filesystem::path(o.out).parent_path();
-        std::error_code ec;
-        if (!parent.empty()) std::filesystem::create_directories(parent, ec);
-        if (ec)
-            throw Error("--out \"" + o.out + "\": cannot create folder \"" + parent.string() +
-                        "\" (" + ec.message() + ")");
-        WriteConeMap(o.out, m, *enc);
-        WriteTextAtomic(StatsPath(o.out), ConeMapStatsJson(stored, s, *enc));
+        // The map and its statistics replace what was there together or not at all; a
+        // missing folder is created only then.
+        OutputSet outputs("--out \"" + o.out + "\"");
+        outputs.Add(o.out);
+        outputs.Add(StatsPath(o.out));  // both destinations checked before any writing
+        WriteConeMap(o.out, m, *enc, &outputs);
+        outputs.Write(StatsPath(o.out), ConeMapStatsJson(stored, s, *enc) + "\n");
+        outputs.Commit();
         std::printf("wrote %s and %s\n", o.out.c_str(), StatsPath(o.out).c_str());
     }
 }

@@ -1,19 +1,17 @@
 // The render pipeline: scene set-up, the fragment program running a kernel per lane, outputs.
 #include "app/pipeline.h"
 
-#include <unistd.h>
-
 #include <charconv>
 #include <chrono>
 #include <cstdlib>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <memory>
 
 #include <tbb/global_control.h>
 
 #include "core/error.h"
+#include "core/output_set.h"
 #include "metrics/heatmap.h"
 #include "raster/camera.h"
 #include "raster/mesh.h"
@@ -270,85 +268,56 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
     return j;
 }
 
-namespace {
-
-void WriteText(const fs::path& path, const std::string& text) {
-    std::ofstream f(path, std::ios::binary);
-    f << text;
-    f.close();
-    if (!f) throw Error("\"" + path.string() + "\": cannot write");
-}
-
-}  // namespace
-
 void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
                         const RenderSettings& s, const HeightField& field) {
     if (outDir.empty()) throw Error("--out: empty; give a directory");
-    fs::path dir(outDir);
+    const fs::path dir(outDir);
     std::error_code ec;
     if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
         throw Error("--out \"" + outDir + "\": exists and is not a directory");
-    // Missing parents are created only once every file is complete; until then the files
-    // live in a staging directory inside the nearest existing ancestor (same filesystem, so
-    // the final rename is atomic).
-    dir = fs::absolute(dir, ec).lexically_normal();
-    if (dir.filename().empty()) dir = dir.parent_path();
-    fs::path ancestor = dir.parent_path();
-    while (!ancestor.empty() && !fs::exists(ancestor, ec) && ancestor != ancestor.root_path())
-        ancestor = ancestor.parent_path();
-    if (!fs::is_directory(ancestor, ec))
-        throw Error("--out \"" + outDir + "\": \"" + ancestor.string() + "\" is not a directory");
-    std::string tmpl = (ancestor / (".reliefsim-staging-XXXXXX")).string();
-    std::vector<char> buf(tmpl.begin(), tmpl.end());
-    buf.push_back('\0');
-    if (!mkdtemp(buf.data()))
-        throw Error("--out \"" + outDir + "\": cannot create a staging directory in \"" +
-                    ancestor.string() + "\"");
-    fs::path staging(buf.data());
-    const std::vector<std::string> names = {"color.png", "iterations.png", "fetches.png",
-                                            "record.exr", "metrics.json"};
-    try {
-        const FrameRecord& r = out.record;
-        const int w = r.width, h = r.height;
-        const size_t n = size_t(w) * size_t(h);
-        std::vector<uint8_t> mask(n);
-        std::vector<float> iters(n), fetches(n), coarse(n), refine(n), texels(n), flags(n),
-            err(n);
-        for (size_t i = 0; i < n; ++i) {
-            mask[i] = r.Covered(i) ? 1 : 0;
-            coarse[i] = float(r.nCoarse[i]);
-            refine[i] = float(r.nRefine[i]);
-            iters[i] = float(r.nCoarse[i] + r.nRefine[i]);
-            fetches[i] = float(r.nFetches[i]);
-            texels[i] = float(r.nTexelReads[i]);
-            flags[i] = float(r.flags[i]);
-            err[i] = PaperError(r, i, field, s.sampler);
-        }
-        WriteColorPng((staging / "color.png").string(), out.color.data(), w, h);
-        WriteHeatmapPng((staging / "iterations.png").string(), iters.data(), mask.data(), w, h,
-                        {s.iterScaleMin, s.iterScaleMax, "inferno",
-                         "iterations (coarse + refine), " + s.method});
-        WriteHeatmapPng((staging / "fetches.png").string(), fetches.data(), mask.data(), w, h,
-                        {s.fetchScaleMin, s.fetchScaleMax, "inferno", "fetches, " + s.method});
-        WriteMultiChannelExr((staging / "record.exr").string(), w, h,
-                             {"hit_u", "hit_v", "hit_depth", "coarse_iterations",
-                              "refine_iterations", "iterations", "fetches", "texel_reads",
-                              "flags", "error_paper"},
-                             {r.hitU.data(), r.hitV.data(), r.hitDepth.data(), coarse.data(),
-                              refine.data(), iters.data(), fetches.data(), texels.data(),
-                              flags.data(), err.data()});
-        WriteText(staging / "metrics.json", MetricsJson(out, s, field).dump(2) + "\n");
-        if (!fs::exists(dir)) {
-            fs::create_directories(dir.parent_path());
-            fs::rename(staging, dir);
-        } else {
-            for (const auto& name : names) fs::rename(staging / name, dir / name);
-            fs::remove_all(staging);
-        }
-    } catch (...) {
-        fs::remove_all(staging, ec);
-        throw;
+    // All five files are staged as temporaries beside their destinations (or in the nearest
+    // existing ancestor while the folder does not exist) and replace what was there only
+    // once every one is complete, all or nothing (core/output_set.h). Every destination is
+    // checked before anything is written.
+    OutputSet outputs("--out \"" + outDir + "\"");
+    auto dest = [&](const char* name) { return (dir / name).string(); };
+    for (const char* name :
+         {"color.png", "iterations.png", "fetches.png", "record.exr", "metrics.json"})
+        outputs.Add(dest(name));
+    const FrameRecord& r = out.record;
+    const int w = r.width, h = r.height;
+    const size_t n = size_t(w) * size_t(h);
+    std::vector<uint8_t> mask(n);
+    std::vector<float> iters(n), fetches(n), coarse(n), refine(n), texels(n), flags(n),
+        err(n);
+    for (size_t i = 0; i < n; ++i) {
+        mask[i] = r.Covered(i) ? 1 : 0;
+        coarse[i] = float(r.nCoarse[i]);
+        refine[i] = float(r.nRefine[i]);
+        iters[i] = float(r.nCoarse[i] + r.nRefine[i]);
+        fetches[i] = float(r.nFetches[i]);
+        texels[i] = float(r.nTexelReads[i]);
+        flags[i] = float(r.flags[i]);
+        err[i] = PaperError(r, i, field, s.sampler);
     }
+    WriteColorPng(dest("color.png"), out.color.data(), w, h, &outputs);
+    WriteHeatmapPng(dest("iterations.png"), iters.data(), mask.data(), w, h,
+                    {s.iterScaleMin, s.iterScaleMax, "inferno",
+                     "iterations (coarse + refine), " + s.method},
+                    &outputs);
+    WriteHeatmapPng(dest("fetches.png"), fetches.data(), mask.data(), w, h,
+                    {s.fetchScaleMin, s.fetchScaleMax, "inferno", "fetches, " + s.method},
+                    &outputs);
+    WriteMultiChannelExr(dest("record.exr"), w, h,
+                         {"hit_u", "hit_v", "hit_depth", "coarse_iterations",
+                          "refine_iterations", "iterations", "fetches", "texel_reads",
+                          "flags", "error_paper"},
+                         {r.hitU.data(), r.hitV.data(), r.hitDepth.data(), coarse.data(),
+                          refine.data(), iters.data(), fetches.data(), texels.data(),
+                          flags.data(), err.data()},
+                         &outputs);
+    outputs.Write(dest("metrics.json"), MetricsJson(out, s, field).dump(2) + "\n");
+    outputs.Commit();
 }
 
 }  // namespace reliefsim

@@ -57,8 +57,13 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& settin
                            const HeightField& field);
 
 /// Writes color.png, iterations.png, fetches.png, record.exr and metrics.json into outDir,
-/// atomically: all files are written to a staging directory first, so a failure leaves
-/// nothing behind.
+/// all or nothing (core/output_set.h): every destination is checked first (a folder or
+/// other non-file standing where an output goes, a name too long: Error, nothing written),
+/// the files are written to temporaries and replace the previous outputs together; any
+/// failure restores what was there and removes the folders this call created. Files in
+/// outDir that are not outputs are never touched. Missing folders are created as mkdir
+/// does (mode 0777 & ~umask). Every file but metrics.json's "timing" is byte-identical for
+/// equal inputs and any thread count.
 void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
                         const RenderSettings& settings, const HeightField& field);
 

@@ -113,9 +113,10 @@ TEST(Render, WritesAllOutputsWithContractKeys) {
         EXPECT_TRUE(j.contains(key)) << key;
     EXPECT_EQ(j["params"]["linear_steps"], 32);
     EXPECT_EQ(j["covered_pixels"], out.summary.coveredPixels);
-    // no staging directory left behind
-    for (const auto& e : fs::directory_iterator(dir.parent_path()))
-        EXPECT_EQ(e.path().filename().string().find(".reliefsim-staging"), std::string::npos);
+    // no temporary (".NAME.rs-XXXXXX") left beside the outputs or their folder
+    for (const fs::path& d : {dir, dir.parent_path()})
+        for (const auto& e : fs::directory_iterator(d))
+            EXPECT_EQ(e.path().filename().string().find(".rs-"), std::string::npos) << e.path();
 }
 
 TEST(Render, InvalidSettingsThrowBeforeRendering) {
