@@ -44,6 +44,7 @@ struct GlCompareArgs {
     std::string heatmap = "glcompare_diff.png";
     std::string tracePixel;
     int maxListed = 10;
+    const CLI::Option* heatmapOption = nullptr;
 };
 
 void PrintTrace(const GlCompareArgs& a, const HeightField& field, int x, int y) {
@@ -149,13 +150,20 @@ void RunGlCompareCommand(GlCompareArgs& a) {
     const RenderSettings& s = a.options.settings;
     if (s.sampler.precision == Precision::Gpu8)
         throw Error("--texture-format: the gpu8 precision has no llvmpipe twin");
+    std::pair<int, int> pixel{-1, -1};
+    if (!a.tracePixel.empty()) {
+        pixel = ParsePixel("--trace-pixel", a.tracePixel, s.width, s.height);
+        if (a.json) throw Error("--json: not used with --trace-pixel (the trace is text)");
+        if (a.heatmapOption && a.heatmapOption->count() > 0)
+            throw Error("--heatmap: not used with --trace-pixel (a trace writes no heatmap)");
+    } else if (!a.heatmap.empty()) {
+        CheckOutputFile("--heatmap", a.heatmap, /*folderIsCreated=*/false);
+    }
+    // Two records, llvmpipe's two RGBA32F targets and their read-back, on top of a render.
+    if (a.tracePixel.empty()) RequireFrameMemory(s.width, s.height, 320);
     HeightField field = LoadRenderMap(a.options);
     if (!a.tracePixel.empty()) {
-        int x = 0, y = 0;
-        char comma = 0, extra = 0;
-        if (std::sscanf(a.tracePixel.c_str(), "%d%c%d%c", &x, &comma, &y, &extra) != 3 ||
-            comma != ',')
-            throw Error("--trace-pixel \"" + a.tracePixel + "\": expected X,Y, e.g. 10,20");
+        const auto [x, y] = pixel;
         PrintTrace(a, field, x, y);
         return;
     }
@@ -314,9 +322,9 @@ void RegisterGlCompareCommand(CLI::App& root) {
         "render with the C++ simulator and with the GLSL twins on Mesa llvmpipe (EGL "
         "surfaceless); report per field the share of bit-identical pixels, max ulps, the "
         "first differing pixels, the lane-cost check, and write a difference heatmap");
-    AddRenderOptions(cmd, a->options);
+    AddRenderOptions(cmd, a->options, /*withHeatmapScales=*/false);
     cmd->add_flag("--json", a->json, "print the report as JSON");
-    cmd->add_option("--heatmap", a->heatmap,
+    a->heatmapOption = cmd->add_option("--heatmap", a->heatmap,
                     "difference heatmap PNG (differing fields per pixel); empty: none")
         ->capture_default_str();
     cmd->add_option("--trace-pixel", a->tracePixel,

@@ -6,7 +6,9 @@
 #include <unistd.h>
 
 #include "app/commands.h"
+#include "app/render_options.h"
 #include "core/error.h"
+#include "core/memory.h"
 #include "core/output_set.h"
 #include "texture/cone_map.h"
 #include "texture/map_cache.h"
@@ -33,7 +35,74 @@ struct MapsOptions {
     int stackedCount = 4;
     int animate = 0;
     int bins = 32;
+    const CLI::App* command = nullptr;  ///< to ask which options were given
+    bool Given(const char* option) const { return command && command->count(option) > 0; }
 };
+
+/// Refuses options that have no effect in this combination, naming both (a silently
+/// ignored option misleads: the user believes it was applied).
+void CheckCombinations(const MapsOptions& o, ConeKind kind) {
+    const std::string k = "--kind " + std::string(ToString(kind));
+    auto refuse = [](const std::string& option, const std::string& why) {
+        throw Error(option + ": " + why);
+    };
+    const bool mip = kind == ConeKind::MinMip || kind == ConeKind::MaxMip;
+    const bool sectorKind = kind == ConeKind::Cone || kind == ConeKind::Quad ||
+                            kind == ConeKind::Acm4 || kind == ConeKind::Acm8;
+    if (mip) {
+        for (const char* opt : {"--encoding", "--adaptive", "--threshold", "--levels",
+                                "--search-steps", "--stacked-count", "--relaxed", "--safety",
+                                "--external", "--external-channel", "--cache-dir", "--animate",
+                                "--bins"})
+            if (o.Given(opt))
+                refuse(opt, "does not apply to " + k +
+                                " (a pyramid of depths, written as one MIP-mapped file)");
+    }
+    if (o.Given("--animate")) {
+        if (!sectorKind)
+            refuse("--animate", "needs --kind cone, quad, acm4 or acm8 (adaptive "
+                                "preprocessing, 000 Algorithm 1), not " + k);
+        for (const char* opt : {"--out", "--cache-dir", "--external", "--external-channel",
+                                "--safety", "--encoding", "--search-steps", "--stacked-count",
+                                "--relaxed", "--bins"})
+            if (o.Given(opt))
+                refuse(opt, "does not apply with --animate (frames are regenerated and timed, "
+                            "not written)");
+    }
+    if (o.adaptive && !sectorKind)
+        refuse("--adaptive", "applies to --kind cone, quad, acm4 and acm8 only, not " + k);
+    for (const char* opt : {"--threshold", "--levels"})
+        if (o.Given(opt) && !o.adaptive && !o.Given("--animate"))
+            refuse(opt, "applies only with --adaptive (or --animate)");
+    const bool relaxedSearch =
+        kind == ConeKind::Relaxed ||
+        ((kind == ConeKind::ConeNormal || kind == ConeKind::Stacked) && o.relaxed);
+    if (o.Given("--search-steps") && !relaxedSearch)
+        refuse("--search-steps", "applies to --kind relaxed (and cone-normal or stacked with "
+                                 "--relaxed) only, not " + k);
+    if (o.Given("--stacked-count") && kind != ConeKind::Stacked)
+        refuse("--stacked-count", "applies to --kind stacked only, not " + k);
+    if (o.Given("--external-channel") && o.external.empty())
+        refuse("--external-channel", "applies only with --external");
+    if (!o.external.empty()) {
+        for (const char* opt : {"--cache-dir", "--adaptive", "--threshold", "--levels",
+                                "--search-steps", "--stacked-count", "--relaxed"})
+            if (o.Given(opt))
+                refuse(opt, "does not apply with --external (the map is read, not generated)");
+        const bool all = o.externalChannel == "all";
+        const bool oneChannel = kind == ConeKind::Cone || kind == ConeKind::Relaxed ||
+                                kind == ConeKind::RelaxedExact || kind == ConeKind::ConeNormal;
+        const bool fourChannels = kind == ConeKind::Quad || kind == ConeKind::Acm4;
+        if (!oneChannel && !fourChannels)
+            refuse("--external", k + " cannot be read from an image (only cone, relaxed, "
+                                     "relaxed-exact, cone-normal, quad and acm4)");
+        if (oneChannel && all)
+            refuse("--external-channel all", k + " has one channel; pick R, G, B or A");
+        if (fourChannels && !all)
+            refuse("--external-channel " + o.externalChannel,
+                   k + " has four channels; use --external-channel all (R, G, B, A)");
+    }
+}
 
 void Status(const char* msg) {
     if (::isatty(2)) std::fprintf(stderr, "\r[maps] %-60s", msg);
@@ -88,6 +157,7 @@ void Run(const MapsOptions& o) {
     if (o.animate < 0 || o.animate > 100000)
         throw Error("--animate " + std::to_string(o.animate) + ": expected 0..100000 frames");
     if (o.bins < 1 || o.bins > 4096) throw Error("--bins: expected 1..4096");
+    CheckCombinations(o, *kind);
     int extChannel = 2;
     if (o.externalChannel == "R") extChannel = 0;
     else if (o.externalChannel == "G") extChannel = 1;
@@ -107,6 +177,20 @@ void Run(const MapsOptions& o) {
     if (o.relaxed && *kind != ConeKind::ConeNormal && *kind != ConeKind::Stacked)
         throw Error("--relaxed: applies to --kind cone-normal and stacked only (for plain relaxed "
                     "cones use --kind relaxed)");
+    if (!o.cacheDir.empty()) {
+        std::error_code ec;
+        const auto st = std::filesystem::status(o.cacheDir, ec);
+        if (std::filesystem::exists(st) && !std::filesystem::is_directory(st))
+            throw Error("--cache-dir \"" + o.cacheDir + "\": exists and is not a directory");
+    }
+    if (!o.out.empty()) {
+        CheckOutputFile("--out", o.out);
+        std::error_code ec;
+        const auto st = std::filesystem::symlink_status(StatsPath(o.out), ec);
+        if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st))
+            throw Error("--out \"" + o.out + "\": \"" + StatsPath(o.out) +
+                        "\" (its statistics) exists and is not a regular file");
+    }
     if (!o.out.empty() && std::filesystem::path(o.out).extension() == ".png" &&
         *kind != ConeKind::Acm8 && ChannelCount(*kind, p) > 4)
         throw Error("--out \"" + o.out + "\": " + std::string(ToString(*kind)) + " has " +
@@ -152,6 +236,13 @@ void Run(const MapsOptions& o) {
     }
 
     const HeightField hf = LoadMapFromOptions(o.map);
+    // The generators keep a few float planes and search windows per texel (measured peak
+    // RSS: relaxed ~370 bytes per texel above the base, other kinds less).
+    RequireMemory((64ull << 20) + uint64_t(hf.width) * uint64_t(hf.height) *
+                                      (400 + 8 * uint64_t(ChannelCount(*kind, p))),
+                  "--map " + hf.name + " (" + std::to_string(hf.width) + "x" +
+                      std::to_string(hf.height) + ", --kind " + o.kind + ")",
+                  "use a smaller map");
     if (*kind == ConeKind::MinMip || *kind == ConeKind::MaxMip) {
         // maxmip: max height = min depth; minmip: min height = max depth.
         const auto levels = BuildMipPyramid(hf.depth, hf.width, hf.height, 1,
@@ -241,6 +332,7 @@ void RegisterMapsCommand(CLI::App& root) {
                     "N frames of the dynamic sinusoid map at the --map size, regenerated and "
                     "preprocessed with adaptive ACM each frame; prints per-frame times");
     cmd->add_option("--bins", o->bins, "histogram bins over [0,1]")->capture_default_str();
+    o->command = cmd;
     cmd->callback([o] { Run(*o); });
 }
 

@@ -19,7 +19,10 @@ struct RenderArgs {
 void RunRender(RenderArgs& a) {
     ResolveRenderSettings(a.options);  // before any file is read or written
     const RenderSettings& s = a.options.settings;
+    CheckOutputDirectory("--out", a.out);
+    RequireFrameMemory(s.width, s.height);
     HeightField field = LoadRenderMap(a.options);
+    RequireFrameMemory(s.width, s.height);  // what is left once the map is in memory
     RenderOutput out = Render(field, s);
     WriteRenderOutputs(a.out, out, s, field);
     if (!a.quiet) {

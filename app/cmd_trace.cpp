@@ -18,15 +18,12 @@ void RegisterTraceCommand(CLI::App& root) {
     auto* cmd = root.add_subcommand(
         "trace", "run one pixel's kernel of the scene `render` would draw and print every fetch "
                  "(uv, ray depth, sampled depth) and the result");
-    AddRenderOptions(cmd, a->options);
+    AddRenderOptions(cmd, a->options, /*withHeatmapScales=*/false);
     cmd->add_option("--pixel", a->pixel, "pixel X,Y (row 0 at the top)")->required();
     cmd->callback([a] {
         ResolveRenderSettings(a->options);
-        int x = 0, y = 0;
-        char comma = 0, extra = 0;
-        if (std::sscanf(a->pixel.c_str(), "%d%c%d%c", &x, &comma, &y, &extra) != 3 ||
-            comma != ',')
-            throw Error("--pixel \"" + a->pixel + "\": expected X,Y, e.g. 10,20");
+        const auto [x, y] = ParsePixel("--pixel", a->pixel, a->options.settings.width,
+                                       a->options.settings.height);
         HeightField field = LoadRenderMap(a->options);
         std::cout << FormatTrace(TracePixel(field, a->options.settings, x, y));
     });

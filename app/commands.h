@@ -14,6 +14,10 @@ struct MapOptions {
     std::string map = "builtin:shapes";  ///< file path or builtin:NAME[:SIZE]
     std::string channel = "auto";        ///< R|G|B|A|auto
     std::string stores = "height";       ///< height|depth
+    /// Set by AddMapOptions: tells whether --map-channel / --map-stores were given (they do
+    /// not apply to a builtin map, and are refused there).
+    const CLI::Option* channelOption = nullptr;
+    const CLI::Option* storesOption = nullptr;
 };
 
 /// Adds --map, --map-channel, --map-stores to a subcommand.

@@ -1,9 +1,34 @@
 // reliefsim: the command line.
 #include <cstdio>
 #include <exception>
+#include <new>
+#include <string>
 
 #include "app/commands.h"
 #include "core/error.h"
+
+namespace {
+
+/// Every error is one line: embedded newlines (third-party messages) become "; ".
+std::string OneLine(std::string s) {
+    std::string out;
+    for (char c : s) {
+        if (c == '\n' || c == '\r') {
+            while (!out.empty() && out.back() == ' ') out.pop_back();
+            if (!out.empty() && out.back() != ' ' && out.back() != ';') out += "; ";
+        } else {
+            out += c;
+        }
+    }
+    while (!out.empty() && (out.back() == ' ' || out.back() == ';')) out.pop_back();
+    return out;
+}
+
+void PrintError(const std::string& message) {
+    std::fprintf(stderr, "reliefsim: error: %s\n", OneLine(message).c_str());
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
     using namespace reliefsim;
@@ -15,12 +40,23 @@ int main(int argc, char** argv) {
     RegisterRenderCommand(app);
     RegisterSummaryCommand(app);
     RegisterTraceCommand(app);
-#ifdef RS_HAVE_MAPS_COMMAND
     RegisterMapsCommand(app);
-#endif
 #ifdef RS_HAVE_GLCOMPARE_COMMAND
     RegisterGlCompareCommand(app);
 #endif
+    // An unknown first word is named, with the commands that exist (CLI11 would only say
+    // that a subcommand is required).
+    std::string names;
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
+        names += (names.empty() ? "" : ", ") + sub->get_name();
+        known = known || (argc >= 2 && sub->get_name() == argv[1]);
+    }
+    if (argc >= 2 && argv[1][0] != '-' && !known) {
+        PrintError(std::string("\"") + argv[1] + "\": unknown command; the commands are: " +
+                   names + " (reliefsim COMMAND --help for each)");
+        return 2;
+    }
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {
@@ -28,14 +64,17 @@ int main(int argc, char** argv) {
     } catch (const CLI::CallForAllHelp& e) {
         return app.exit(e);
     } catch (const CLI::ParseError& e) {
-        // One line, like every other error (CLI11's own report takes two).
-        std::fprintf(stderr, "reliefsim: error: %s; run with --help for usage\n", e.what());
+        PrintError(std::string(e.what()) + "; run with --help for usage");
         return 2;
     } catch (const Error& e) {
-        std::fprintf(stderr, "reliefsim: error: %s\n", e.what());
+        PrintError(e.what());
+        return 1;
+    } catch (const std::bad_alloc&) {
+        PrintError("out of memory; the run needs more memory than this machine has (try a "
+                   "smaller --size or map)");
         return 1;
     } catch (const std::exception& e) {
-        std::fprintf(stderr, "reliefsim: error: %s\n", e.what());
+        PrintError(e.what());
         return 1;
     }
     return 0;

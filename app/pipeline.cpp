@@ -1,7 +1,9 @@
 // The render pipeline: scene set-up, the fragment program running a kernel per lane, outputs.
 #include "app/pipeline.h"
 
+#include <algorithm>
 #include <charconv>
+#include <cstdio>
 #include <chrono>
 #include <cstdlib>
 #include <cmath>
@@ -11,6 +13,7 @@
 #include <tbb/global_control.h>
 
 #include "core/error.h"
+#include "core/memory.h"
 #include "core/output_set.h"
 #include "metrics/heatmap.h"
 #include "raster/camera.h"
@@ -23,26 +26,50 @@ namespace fs = std::filesystem;
 
 void ValidateSettings(const RenderSettings& s) {
     auto bad = [](const std::string& what) { throw Error(what); };
+    auto num = [](float v) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.9g", double(v));
+        return std::string(buf);
+    };
     if (s.width < 1 || s.height < 1 || s.width > 16384 || s.height > 16384)
         bad("--size " + std::to_string(s.width) + "x" + std::to_string(s.height) +
             ": each side must be in [1, 16384]");
     if (!(s.viewAngle >= 0.0f && s.viewAngle < 90.0f))
-        bad("--view-angle " + std::to_string(s.viewAngle) + ": must be in [0, 90) degrees");
-    if (!std::isfinite(s.azimuth)) bad("--azimuth: must be a finite number of degrees");
-    if (!(s.depthScale > 0.0f) || !std::isfinite(s.depthScale))
-        bad("--depth-scale " + std::to_string(s.depthScale) + ": must be > 0");
-    if (!(s.tiling > 0.0f) || !std::isfinite(s.tiling))
-        bad("--tiling " + std::to_string(s.tiling) + ": must be > 0");
-    if (!(s.distance > 0.0f) || !std::isfinite(s.distance))
-        bad("--distance " + std::to_string(s.distance) + ": must be > 0");
+        bad("--view-angle " + num(s.viewAngle) + ": must be in [0, 90) degrees");
+    if (!(std::fabs(s.azimuth) <= 1e6f))
+        bad("--azimuth " + num(s.azimuth) + ": must be a finite angle in [-1e6, 1e6] degrees");
+    if (!(s.depthScale > 0.0f && s.depthScale <= kMaxDepthScale))
+        bad("--depth-scale " + num(s.depthScale) + ": must be in (0, " + num(kMaxDepthScale) +
+            "] plane widths");
+    if (!(s.tiling > 0.0f && s.tiling <= kMaxTiling))
+        bad("--tiling " + num(s.tiling) + ": must be in (0, " + num(kMaxTiling) + "]");
+    if (!(s.distance >= kMinDistance && s.distance <= kMaxDistance))
+        bad("--distance " + num(s.distance) + ": must be in [" + num(kMinDistance) + ", " +
+            num(kMaxDistance) + "] plane widths");
     if (!(s.fovY > 0.0f && s.fovY < 180.0f))
-        bad("--fov " + std::to_string(s.fovY) + ": must be in (0, 180) degrees");
-    if (s.threads < 0) bad("--threads " + std::to_string(s.threads) + ": must be >= 0");
-    if (!(s.iterScaleMax > s.iterScaleMin))
-        bad("--iterations-scale: max must be greater than min");
-    if (!(s.fetchScaleMax > s.fetchScaleMin))
-        bad("--fetches-scale: max must be greater than min");
+        bad("--fov " + num(s.fovY) + ": must be in (0, 180) degrees");
+    if (s.threads < 0 || s.threads > 1024)
+        bad("--threads " + std::to_string(s.threads) + ": must be in [0, 1024]");
+    if (!std::isfinite(s.iterScaleMin) || !std::isfinite(s.iterScaleMax) ||
+        !(s.iterScaleMax > s.iterScaleMin))
+        bad("--iterations-scale: MIN and MAX must be finite with MAX > MIN");
+    if (!std::isfinite(s.fetchScaleMin) || !std::isfinite(s.fetchScaleMax) ||
+        !(s.fetchScaleMax > s.fetchScaleMin))
+        bad("--fetches-scale: MIN and MAX must be finite with MAX > MIN");
     ResolveParams(FindMethod(s.method), s.set);
+}
+
+uint64_t EstimateFrameBytes(int width, int height) {
+    constexpr uint64_t kBytesPerPixel = 112, kBaseBytes = 64ull << 20;
+    return kBaseBytes + kBytesPerPixel * uint64_t(std::max(width, 0)) * uint64_t(std::max(height, 0));
+}
+
+void RequireFrameMemory(int width, int height, uint64_t bytesPerPixel) {
+    const uint64_t need = bytesPerPixel ? (64ull << 20) + bytesPerPixel * uint64_t(width) *
+                                                              uint64_t(height)
+                                        : EstimateFrameBytes(width, height);
+    RequireMemory(need, "--size " + std::to_string(width) + "x" + std::to_string(height),
+                  "use a smaller --size");
 }
 
 namespace {

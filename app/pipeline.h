@@ -15,6 +15,12 @@
 
 namespace reliefsim {
 
+/// Valid ranges of the scene settings beyond their natural bounds (so float arithmetic in
+/// the camera and rasterizer stays finite).
+constexpr float kMaxDepthScale = 100.0f;  ///< plane widths
+constexpr float kMaxTiling = 4096.0f;
+constexpr float kMinDistance = 0.01f, kMaxDistance = 1000.0f;  ///< plane widths
+
 /// Everything `reliefsim render` takes besides the map. Defaults are the documented ones.
 struct RenderSettings {
     std::string method = "relief";
@@ -35,6 +41,18 @@ struct RenderSettings {
 /// Throws Error naming the first bad setting (size, angles, depth scale, tiling, threads,
 /// scales, method, parameters).
 void ValidateSettings(const RenderSettings& settings);
+
+/// Peak memory of one Render() plus WriteRenderOutputs() at width x height, from the
+/// record, the colour buffer and the output conversions (measured: about 107 bytes per
+/// pixel at 1024² and 2048², `/usr/bin/time -v reliefsim render --size 2048x2048`), plus a
+/// fixed base. The height map and derived maps come on top.
+uint64_t EstimateFrameBytes(int width, int height);
+
+/// Throws Error naming --size when a frame of that size needs more memory than is
+/// available (core/memory.h): "--size WxH: needs about 28.0 GiB of memory, 20.1 GiB
+/// available; use a smaller --size". `bytesPerPixel` overrides the render estimate
+/// (glcompare keeps two records and llvmpipe's targets).
+void RequireFrameMemory(int width, int height, uint64_t bytesPerPixel = 0);
 
 struct RenderOutput {
     FrameRecord record;

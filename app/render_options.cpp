@@ -2,35 +2,45 @@
 #include "app/render_options.h"
 
 #include <cstdio>
+#include <filesystem>
 
 #include "core/error.h"
+#include "core/parse.h"
+#include "raster/rasterizer.h"
 
 namespace reliefsim {
 
 namespace {
 
 void ParseSize(const std::string& text, int& w, int& h) {
-    unsigned a = 0, b = 0;
-    char x = 0, extra = 0;
-    if (std::sscanf(text.c_str(), "%u%c%u%c", &a, &x, &b, &extra) != 3 || (x != 'x' && x != 'X'))
+    const size_t x = text.find_first_of("xX");
+    if (text.empty() || x == std::string::npos || x == 0 || x + 1 == text.size())
         throw Error("--size \"" + text + "\": expected WxH, e.g. 512x512");
-    w = int(a);
-    h = int(b);
+    w = int(ParseIntInRange(std::string_view(text).substr(0, x), 1, kMaxImageSize,
+                            "--size \"" + text + "\": width"));
+    h = int(ParseIntInRange(std::string_view(text).substr(x + 1), 1, kMaxImageSize,
+                            "--size \"" + text + "\": height"));
 }
 
 void ParseScale(const std::string& opt, const std::string& text, float& lo, float& hi) {
     if (text.empty()) return;
-    float a = 0, b = 0;
-    char c = 0, extra = 0;
-    if (std::sscanf(text.c_str(), "%f%c%f%c", &a, &c, &b, &extra) != 3 || c != ':')
-        throw Error(opt + " \"" + text + "\": expected MIN:MAX, e.g. 0:64");
-    lo = a;
-    hi = b;
+    const size_t c = text.find(':');
+    std::optional<float> a, b;
+    if (c != std::string::npos) {
+        a = ParseFiniteFloat(std::string_view(text).substr(0, c));
+        b = ParseFiniteFloat(std::string_view(text).substr(c + 1));
+    }
+    if (!a || !b)
+        throw Error(opt + " \"" + text + "\": expected MIN:MAX with finite numbers, e.g. 0:64");
+    if (!(*b > *a))
+        throw Error(opt + " \"" + text + "\": MAX must be greater than MIN");
+    lo = *a;
+    hi = *b;
 }
 
 }  // namespace
 
-void AddRenderOptions(CLI::App* cmd, RenderOptions& o) {
+void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
     AddMapOptions(cmd, o.map);
     cmd->add_option("--method", o.settings.method, "method name (see `reliefsim methods`)")
         ->capture_default_str();
@@ -58,7 +68,9 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o) {
                     "8.8 fixed point; the map is quantised)")
         ->capture_default_str();
     cmd->add_option("--threads", o.settings.threads, "worker threads (0 = all cores)")
-        ->capture_default_str();
+        ->capture_default_str()
+        ->check(CLI::Range(0, kMaxThreads));
+    if (!withHeatmapScales) return;
     cmd->add_option("--iterations-scale", o.iterScale,
                     "fixed MIN:MAX of the iterations heatmap (default 0:64)");
     cmd->add_option("--fetches-scale", o.fetchScale,
@@ -84,6 +96,83 @@ void ResolveRenderSettings(RenderOptions& o) {
     ParseScale("--iterations-scale", o.iterScale, s.iterScaleMin, s.iterScaleMax);
     ParseScale("--fetches-scale", o.fetchScale, s.fetchScaleMin, s.fetchScaleMax);
     ValidateSettings(s);
+}
+
+std::pair<int, int> ParsePixel(const std::string& option, const std::string& text, int width,
+                               int height) {
+    const size_t comma = text.find(',');
+    if (text.empty() || comma == std::string::npos || comma == 0 || comma + 1 == text.size())
+        throw Error(option + " \"" + text + "\": expected X,Y, e.g. 10,20 (row 0 at the top)");
+    const std::string subject = option + " \"" + text + "\":";
+    const int x = int(ParseIntInRange(std::string_view(text).substr(0, comma), 0, width - 1,
+                                      subject + " X (the image is " + std::to_string(width) +
+                                          "x" + std::to_string(height) + ")"));
+    const int y = int(ParseIntInRange(std::string_view(text).substr(comma + 1), 0, height - 1,
+                                      subject + " Y (the image is " + std::to_string(width) +
+                                          "x" + std::to_string(height) + ")"));
+    return {x, y};
+}
+
+void CheckOutputFile(const std::string& option, const std::string& path, bool folderIsCreated) {
+    namespace fs = std::filesystem;
+    const fs::path p(path);
+    std::error_code ec;
+    if (p.filename().empty() || p.filename() == "." || p.filename() == "..")
+        throw Error(option + " \"" + path + "\": names a directory; expected a file name");
+    if (p.filename().string().size() > 200)
+        throw Error(option + " \"" + path + "\": file name too long (" +
+                    std::to_string(p.filename().string().size()) + " characters)");
+    const fs::file_status st = fs::status(p, ec);
+    if (fs::exists(st) && !fs::is_regular_file(st))
+        throw Error(option + " \"" + path + "\": exists and is not a regular file");
+    fs::path ancestor = fs::absolute(p, ec).lexically_normal().parent_path();
+    if (!folderIsCreated) {
+        if (!fs::is_directory(ancestor, ec))
+            throw Error(option + " \"" + path + "\": folder \"" + ancestor.string() +
+                        "\" does not exist or is not a directory");
+        return;
+    }
+    // The folder is created when missing; its nearest existing ancestor must be a directory.
+    while (ancestor.has_parent_path() && ancestor != ancestor.root_path() &&
+           !fs::exists(fs::status(ancestor, ec)))
+        ancestor = ancestor.parent_path();
+    if (!fs::is_directory(ancestor, ec))
+        throw Error(option + " \"" + path + "\": \"" + ancestor.string() +
+                    "\" is not a directory, so the file cannot be created there");
+}
+
+void CheckOutputDirectory(const std::string& option, const std::string& dir,
+                          const std::vector<std::string>& outputs) {
+    namespace fs = std::filesystem;
+    if (dir.empty()) throw Error(option + ": empty; give a directory");
+    const fs::path p(dir);
+    for (const fs::path& part : p)
+        if (part.string().size() > 255)
+            throw Error(option + " \"" + dir + "\": a path component is " +
+                        std::to_string(part.string().size()) +
+                        " characters long; the file system allows 255");
+    std::error_code ec;
+    const fs::file_status st = fs::status(p, ec);
+    if (fs::exists(st)) {
+        if (!fs::is_directory(st))
+            throw Error(option + " \"" + dir + "\": exists and is not a directory");
+        for (const std::string& name : outputs) {
+            const fs::file_status o = fs::symlink_status(p / name, ec);
+            if (fs::exists(o) && !fs::is_regular_file(o))
+                throw Error(option + " \"" + dir + "\": \"" + name +
+                            "\" there is not a regular file (a directory or other entry "
+                            "stands where an output goes); nothing was written");
+        }
+        return;
+    }
+    // Not there yet: the nearest existing ancestor must be a directory.
+    fs::path ancestor = fs::absolute(p, ec).lexically_normal();
+    while (ancestor.has_parent_path() && ancestor != ancestor.root_path() &&
+           !fs::exists(fs::status(ancestor, ec)))
+        ancestor = ancestor.parent_path();
+    if (!fs::is_directory(ancestor, ec))
+        throw Error(option + " \"" + dir + "\": \"" + ancestor.string() +
+                    "\" is not a directory, so the folder cannot be created");
 }
 
 HeightField LoadRenderMap(const RenderOptions& o) {

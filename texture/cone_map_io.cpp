@@ -61,47 +61,39 @@ void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc,
 
 ConeMap LoadExternalConeMap(const std::string& path, ConeKind kind, int channel,
                             int expectWidth, int expectHeight) {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) throw Error("--external \"" + path + "\": cannot open (" + OIIO::geterror() + ")");
-    const OIIO::ImageSpec spec = in->spec();
-    const int W = spec.width, H = spec.height, nc = spec.nchannels;
-    if (expectWidth > 0 && (W != expectWidth || H != expectHeight)) {
-        in->close();
-        throw Error("--external \"" + path + "\": is " + std::to_string(W) + "x" +
-                    std::to_string(H) + ", expected " + std::to_string(expectWidth) + "x" +
-                    std::to_string(expectHeight) + " (the height map's size)");
-    }
+    const std::string subject = "--external \"" + path + "\"";
     const int want = channel < 0 ? 4 : 1;
-    if ((channel < 0 && nc < 4) || channel >= nc) {
-        in->close();
-        throw Error("--external \"" + path + "\": has " + std::to_string(nc) +
-                    " channels; the ratio channel is missing (GPU Gems 3 maps: ratio in B)");
-    }
-    std::vector<float> all(size_t(W) * size_t(H) * size_t(nc));
-    // 8-bit sources: read the codes and convert like the GPU (unorm8), not OIIO's division.
-    const bool is8 = spec.format == OIIO::TypeDesc::UINT8;
-    if (is8) {
-        std::vector<uint8_t> raw(all.size());
-        if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::UINT8, raw.data()))
-            throw Error("--external \"" + path + "\": read failed (" + in->geterror() + ")");
-        for (size_t i = 0; i < raw.size(); ++i) all[i] = Unorm8ToFloat(raw[i]);
-    } else if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, all.data())) {
-        throw Error("--external \"" + path + "\": read failed (" + in->geterror() + ")");
-    }
-    in->close();
+    auto pick = [&](int nc) -> std::pair<int, int> {
+        if ((channel < 0 && nc < 4) || channel >= nc)
+            throw Error(subject + ": has " + std::to_string(nc) + " channel" +
+                        (nc == 1 ? "" : "s") + "; the ratio channel " +
+                        (channel < 0 ? std::string("set RGBA") : std::string(1, "RGBA"[channel])) +
+                        " is missing (GPU Gems 3 maps: ratio in B)");
+        return channel < 0 ? std::pair<int, int>{0, 4} : std::pair<int, int>{channel, channel + 1};
+    };
+    // 8-bit sources: the codes are converted like the GPU's unorm8, not OIIO's division.
+    ImageData img = ReadImageFile(path, subject, pick, /*keep8=*/true);
+    const int W = img.width, H = img.height;
+    if (expectWidth > 0 && (W != expectWidth || H != expectHeight))
+        throw Error(subject + ": is " + std::to_string(W) + "x" + std::to_string(H) +
+                    ", expected " + std::to_string(expectWidth) + "x" +
+                    std::to_string(expectHeight) + " (the height map's size)");
     ConeMap m;
     m.kind = kind;
     m.width = W;
     m.height = H;
     m.channels = want;
     m.values.resize(size_t(W) * size_t(H) * size_t(want));
-    for (size_t t = 0; t < size_t(W) * size_t(H); ++t)
-        for (int c = 0; c < want; ++c) {
-            const float v = all[t * size_t(nc) + size_t(channel < 0 ? c : channel)];
-            if (!std::isfinite(v) || v < 0.0f)
-                throw Error("--external \"" + path + "\": holds a negative or non-finite ratio");
-            m.values[t * size_t(want) + size_t(c)] = v;
+    for (size_t t = 0; t < m.values.size(); ++t) {
+        const float v = img.is8 ? Unorm8ToFloat(img.values8[t]) : img.values[t];
+        if (!std::isfinite(v) || v < 0.0f) {
+            const size_t texel = t / size_t(want);
+            throw Error(subject + ": texel (" + std::to_string(texel % size_t(W)) + ", " +
+                        std::to_string(texel / size_t(W)) +
+                        ") holds a negative or non-finite ratio; ratios must be >= 0");
         }
+        m.values[t] = v;
+    }
     return m;
 }
 

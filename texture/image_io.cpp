@@ -1,12 +1,26 @@
 // Height-map loading and image writing through OpenImageIO.
 #include "texture/image_io.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imagebuf.h>
 #include <OpenImageIO/imageio.h>
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <iterator>
+#include <mutex>
+#include <sstream>
+#include <vector>
 
 #include "core/error.h"
+#include "core/memory.h"
 #include "core/output_set.h"
 #include "texture/procedural.h"
 
@@ -29,62 +43,289 @@ std::optional<Stores> ParseStores(std::string_view s) {
     return std::nullopt;
 }
 
-HeightField LoadHeightMapFile(const std::string& path, const MapLoadOptions& options) {
-    auto in = OIIO::ImageInput::open(path);
+namespace {
+
+/// Formats this tool reads height and cone maps from (OpenImageIO plugin names). Anything
+/// else OpenImageIO can open (its "null" and "term" pseudo-formats, movies, volumes) is
+/// refused: a path ending in ".null" must not become a blank map.
+constexpr const char* kImageFormats[] = {"png", "targa", "tiff", "openexr", "jpeg",
+                                         "bmp", "hdr",   "pnm",  "webp"};
+constexpr const char* kImageFormatList = "PNG, TGA, TIFF, EXR, JPEG, BMP, HDR, PNM, WebP";
+
+std::string Quote(const std::string& s) { return "\"" + s + "\""; }
+
+/// Third-party text (OpenImageIO errors carry one line per libpng/libtiff message) as one
+/// line: newlines become "; ", runs of blanks one space, repeated messages dropped.
+std::string OneLine(const std::string& text) {
+    std::string out, line;
+    std::vector<std::string> seen;
+    auto flush = [&] {
+        size_t b = line.find_first_not_of(" \t\r"), e = line.find_last_not_of(" \t\r");
+        if (b != std::string::npos) {
+            std::string l = line.substr(b, e - b + 1);
+            if (std::find(seen.begin(), seen.end(), l) == seen.end()) {
+                if (!out.empty()) out += "; ";
+                out += l;
+                seen.push_back(l);
+            }
+        }
+        line.clear();
+    };
+    for (char c : text) {
+        if (c == '\n') flush();
+        else line += c;
+    }
+    flush();
+    if (out.size() > 400) out = out.substr(0, 400) + "...";
+    return out;
+}
+
+/// Redirects file descriptor 2 into a temporary file while an image is decoded: libpng's
+/// default error handler prints "libpng error: ..." straight to stderr, which would give
+/// the user a second, unrelated error line. What was captured goes into our one line.
+/// Serialised by a mutex (stderr is process-wide).
+class StderrCapture {
+public:
+    StderrCapture() : lock_(Mutex()) {
+        std::fflush(stderr);
+        saved_ = ::dup(2);
+        file_ = std::tmpfile();
+        if (saved_ >= 0 && file_) ::dup2(::fileno(file_), 2);
+    }
+    ~StderrCapture() {
+        Restore();
+        if (file_) std::fclose(file_);
+    }
+    /// Restores stderr and returns what was written to it meanwhile.
+    std::string Finish() {
+        Restore();
+        std::string text;
+        if (file_) {
+            std::rewind(file_);
+            char buf[512];
+            size_t n;
+            while ((n = std::fread(buf, 1, sizeof buf, file_)) > 0 && text.size() < 4096)
+                text.append(buf, n);
+            std::fclose(file_);
+            file_ = nullptr;
+        }
+        return text;
+    }
+    StderrCapture(const StderrCapture&) = delete;
+    StderrCapture& operator=(const StderrCapture&) = delete;
+
+private:
+    static std::mutex& Mutex() {
+        static std::mutex m;
+        return m;
+    }
+    void Restore() {
+        if (saved_ >= 0) {
+            std::fflush(stderr);
+            ::dup2(saved_, 2);
+            ::close(saved_);
+            saved_ = -1;
+        }
+    }
+    std::lock_guard<std::mutex> lock_;
+    int saved_ = -1;
+    std::FILE* file_ = nullptr;
+};
+
+/// A regular file opened once and mapped read-only; OpenImageIO decodes it from memory, so
+/// a FIFO, a device or a directory is refused before anything reads from it, and the file
+/// is never opened a second time.
+class MappedFile {
+public:
+    MappedFile(const std::string& path, const std::string& subject) {
+        // O_NONBLOCK: opening a FIFO for reading must not wait for a writer.
+        fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
+        if (fd_ < 0) {
+            const int e = errno;
+            if (e == ENOENT)
+                throw Error(subject + ": does not exist");
+            throw Error(subject + ": cannot open (" + std::strerror(e) + ")");
+        }
+        struct stat st {};
+        if (::fstat(fd_, &st) != 0) {
+            const int e = errno;
+            ::close(fd_);
+            throw Error(subject + ": cannot stat (" + std::strerror(e) + ")");
+        }
+        const char* kind = S_ISDIR(st.st_mode)    ? "a directory"
+                           : S_ISFIFO(st.st_mode) ? "a named pipe (FIFO)"
+                           : S_ISCHR(st.st_mode)  ? "a character device"
+                           : S_ISBLK(st.st_mode)  ? "a block device"
+                           : S_ISSOCK(st.st_mode) ? "a socket"
+                           : S_ISREG(st.st_mode)  ? nullptr
+                                                  : "not a regular file";
+        if (kind) {
+            ::close(fd_);
+            throw Error(subject + ": is " + kind + "; expected a regular image file (" +
+                        kImageFormatList + ")");
+        }
+        if (st.st_size == 0) {
+            ::close(fd_);
+            throw Error(subject + ": is empty (0 bytes); expected an image file (" +
+                        kImageFormatList + ")");
+        }
+        size_ = size_t(st.st_size);
+        void* p = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd_, 0);
+        if (p == MAP_FAILED) {
+            const int e = errno;
+            ::close(fd_);
+            throw Error(subject + ": cannot read (" + std::strerror(e) + ")");
+        }
+        data_ = p;
+    }
+    ~MappedFile() {
+        if (data_) ::munmap(data_, size_);
+        if (fd_ >= 0) ::close(fd_);
+    }
+    MappedFile(const MappedFile&) = delete;
+    MappedFile& operator=(const MappedFile&) = delete;
+    const void* Data() const { return data_; }
+    size_t Size() const { return size_; }
+
+private:
+    int fd_ = -1;
+    void* data_ = nullptr;
+    size_t size_ = 0;
+};
+
+}  // namespace
+
+ImageData ReadImageFile(const std::string& path, const std::string& subject,
+                        const ChannelPicker& pickChannels, bool keep8) {
+    if (path.empty()) throw Error(subject + ": empty path; give an image file");
+    MappedFile file(path, subject);
+    OIIO::Filesystem::IOMemReader proxy(file.Data(), file.Size());
+    StderrCapture capture;
+    auto in = OIIO::ImageInput::open(path, nullptr, &proxy);
     if (!in) {
         std::string err = OIIO::geterror();
-        throw Error("height map \"" + path + "\": cannot open (" +
-                    (err.empty() ? std::string("unreadable or unknown format") : err) + ")");
+        const std::string printed = capture.Finish();
+        if (err.empty()) err = printed;
+        throw Error(subject + ": is not a readable image (" +
+                    (err.empty() ? std::string("unknown or unsupported format") : OneLine(err)) +
+                    "); expected " + kImageFormatList);
     }
+    const std::string format = in->format_name();
+    if (std::find_if(std::begin(kImageFormats), std::end(kImageFormats),
+                     [&](const char* f) { return format == f; }) == std::end(kImageFormats))
+        throw Error(subject + ": format \"" + format + "\" is not an image file format read "
+                    "here; expected " + kImageFormatList);
     const OIIO::ImageSpec& spec = in->spec();
-    const int w = spec.width, h = spec.height, nc = spec.nchannels;
+    const int64_t w = spec.width, h = spec.height, nc = spec.nchannels;
     if (w <= 0 || h <= 0 || nc <= 0)
-        throw Error("height map \"" + path + "\": has zero size");
-    int c = 0;
-    switch (options.channel) {
-        case Channel::Auto: c = nc <= 2 ? 0 : (nc >= 4 ? 3 : -1); break;
-        case Channel::R: c = 0; break;
-        case Channel::G: c = 1; break;
-        case Channel::B: c = 2; break;
-        case Channel::A: c = nc == 2 ? 1 : 3; break;
-    }
-    if (c < 0)
-        throw Error("height map \"" + path + "\": has " + std::to_string(nc) +
-                    " channels and no alpha; pick one with --map-channel R|G|B");
-    if (c >= nc)
-        throw Error("height map \"" + path + "\": --map-channel asks for channel " +
-                    std::to_string(c) + " but the image has " + std::to_string(nc) +
-                    " channels");
-    const bool is8 = spec.format.basetype == OIIO::TypeDesc::UINT8;
-    const bool flip = options.stores == Stores::Height;
-    HeightField hf;
-    if (is8) {
-        std::vector<uint8_t> px(size_t(w) * size_t(h));
-        if (!in->read_image(0, 0, c, c + 1, OIIO::TypeDesc::UINT8, px.data()))
-            throw Error("height map \"" + path + "\": cannot read pixels (" + in->geterror() +
-                        ")");
-        if (flip)
-            for (auto& v : px) v = uint8_t(255 - v);
-        hf = HeightFieldFromUnorm8(w, h, std::move(px), path);
+        throw Error(subject + ": has zero size (" + std::to_string(w) + "x" +
+                    std::to_string(h) + ", " + std::to_string(nc) + " channels)");
+    if (w > kMaxImageSide || h > kMaxImageSide)
+        throw Error(subject + ": header says " + std::to_string(w) + "x" + std::to_string(h) +
+                    ", larger than the " + std::to_string(kMaxImageSide) + "x" +
+                    std::to_string(kMaxImageSide) + " limit (llvmpipe's largest texture)");
+    if (nc > kMaxImageChannels)
+        throw Error(subject + ": header says " + std::to_string(nc) + " channels; at most " +
+                    std::to_string(kMaxImageChannels) + " are read");
+    if (spec.depth != 1 || spec.deep)
+        throw Error(subject + ": is a volume or deep image; expected a flat 2D image");
+    if (spec.tile_width > 0 &&
+        (int64_t(spec.tile_width) * std::max(1, spec.tile_height) > int64_t(kMaxImageSide) * 64 ||
+         spec.tile_width > kMaxImageSide || spec.tile_height > kMaxImageSide))
+        throw Error(subject + ": header says tiles of " + std::to_string(spec.tile_width) +
+                    "x" + std::to_string(spec.tile_height) + " pixels; implausible for a " +
+                    std::to_string(w) + "x" + std::to_string(h) + " image");
+    const auto [c0, c1] = pickChannels(int(nc));
+    RS_CHECK(c0 >= 0 && c1 > c0 && c1 <= nc);
+    const bool as8 = keep8 && spec.format.basetype == OIIO::TypeDesc::UINT8;
+    // What the decode needs: our copy of the channels plus one decoded image of all
+    // channels in the file's type (OpenImageIO's conversion buffer, worst case).
+    const uint64_t pixels = uint64_t(w) * uint64_t(h);
+    const uint64_t need = pixels * uint64_t(c1 - c0) * (as8 ? 1u : 4u) +
+                          pixels * uint64_t(nc) * uint64_t(spec.format.size());
+    RequireMemory(need, subject + " (" + std::to_string(w) + "x" + std::to_string(h) + ")",
+                  "use a smaller image");
+    ImageData img;
+    img.width = int(w);
+    img.height = int(h);
+    img.fileChannels = int(nc);
+    img.channels = c1 - c0;
+    img.is8 = as8;
+    img.format = format;
+    bool ok;
+    if (as8) {
+        img.values8.resize(pixels * size_t(img.channels));
+        ok = in->read_image(0, 0, c0, c1, OIIO::TypeDesc::UINT8, img.values8.data());
     } else {
-        std::vector<float> px(size_t(w) * size_t(h));
-        if (!in->read_image(0, 0, c, c + 1, OIIO::TypeDesc::FLOAT, px.data()))
-            throw Error("height map \"" + path + "\": cannot read pixels (" + in->geterror() +
-                        ")");
-        for (size_t k = 0; k < px.size(); ++k) {
-            if (!std::isfinite(px[k]))
-                throw Error("height map \"" + path + "\": texel (" +
-                            std::to_string(k % size_t(w)) + ", " +
-                            std::to_string(k / size_t(w)) +
-                            ") is NaN or infinite; heights must be finite");
-            if (flip) px[k] = 1.0f - px[k];
+        img.values.resize(pixels * size_t(img.channels));
+        ok = in->read_image(0, 0, c0, c1, OIIO::TypeDesc::FLOAT, img.values.data());
+    }
+    // Decoders report damage (a short strip, data past the end of the file, a JPEG cut
+    // off mid-scan) as errors while still returning true with the missing pixels filled:
+    // a file that was not read completely is refused.
+    std::string err = in->geterror();
+    in->close();
+    const std::string printed = capture.Finish();
+    if (!ok || !err.empty()) {
+        if (!printed.empty()) err += "; " + printed;
+        throw Error(subject + ": is damaged or truncated (" +
+                    (err.empty() ? std::string("the decoder stopped early") : OneLine(err)) +
+                    ")");
+    }
+    return img;
+}
+
+HeightField LoadHeightMapFile(const std::string& path, const MapLoadOptions& options) {
+    const std::string subject = "height map " + Quote(path);
+    auto pick = [&](int nc) -> std::pair<int, int> {
+        int c = 0;
+        switch (options.channel) {
+            case Channel::Auto: c = nc <= 2 ? 0 : (nc >= 4 ? 3 : -1); break;
+            case Channel::R: c = 0; break;
+            case Channel::G: c = 1; break;
+            case Channel::B: c = 2; break;
+            case Channel::A: c = nc == 2 ? 1 : 3; break;
+        }
+        if (c < 0)
+            throw Error(subject + ": has " + std::to_string(nc) +
+                        " channels and no alpha; pick one with --map-channel R|G|B");
+        if (c >= nc)
+            throw Error(subject + ": --map-channel asks for channel " + "RGBA"[c] +
+                        " but the image has " + std::to_string(nc) + " channel" +
+                        (nc == 1 ? "" : "s"));
+        return {c, c + 1};
+    };
+    ImageData img = ReadImageFile(path, subject, pick, /*keep8=*/true);
+    const bool flip = options.stores == Stores::Height;
+    const int w = img.width, h = img.height;
+    HeightField hf;
+    if (img.is8) {
+        if (flip)
+            for (auto& v : img.values8) v = uint8_t(255 - v);
+        hf = HeightFieldFromUnorm8(w, h, std::move(img.values8), path);
+    } else {
+        // Validate as the file stores it, so a message shows the value that is in the file.
+        for (size_t k = 0; k < img.values.size(); ++k) {
+            const float v = img.values[k];
+            if (!std::isfinite(v) || v < 0.0f || v > 1.0f) {
+                std::ostringstream s;
+                s << subject << ": texel (" << k % size_t(w) << ", " << k / size_t(w)
+                  << ") holds ";
+                if (std::isnan(v)) s << "NaN";
+                else if (std::isinf(v)) s << (v > 0 ? "+Inf" : "-Inf");
+                else s << v;
+                s << " (as stored in the file); "
+                  << (options.stores == Stores::Height ? "heights" : "depths")
+                  << " must be finite (no NaN or Inf) and in [0, 1]";
+                throw Error(s.str());
+            }
+            if (flip) img.values[k] = 1.0f - v;
         }
         hf.width = w;
         hf.height = h;
-        hf.depth = std::move(px);
+        hf.depth = std::move(img.values);
         hf.name = path;
     }
-    in->close();
     ValidateHeightField(hf);
     return hf;
 }

@@ -8,6 +8,7 @@
 #include <functional>
 
 #include "core/error.h"
+#include "core/parse.h"
 
 namespace reliefsim {
 
@@ -153,10 +154,7 @@ HeightField MakeBuiltinMap(std::string_view spec) {
     if (auto colon = rest.find(':'); colon != std::string_view::npos) {
         name = rest.substr(0, colon);
         std::string_view num = rest.substr(colon + 1);
-        auto [p, ec] = std::from_chars(num.data(), num.data() + num.size(), size);
-        if (ec != std::errc() || p != num.data() + num.size())
-            throw Error("--map " + std::string(spec) + ": size \"" + std::string(num) +
-                        "\" is not an integer; expected builtin:NAME[:SIZE]");
+        size = int(ParseIntInRange(num, 1, 16384, "--map " + std::string(spec) + ": size"));
     }
     return MakeBuiltinMap(name, size, size);
 }

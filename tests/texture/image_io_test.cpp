@@ -6,6 +6,9 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+
+#include <sys/stat.h>
 
 #include "core/error.h"
 #include "texture/image_io.h"
@@ -127,4 +130,61 @@ TEST(ImageIo, EmptyFieldIsRejected) {
     HeightField f;
     f.name = "empty";
     EXPECT_THROW(ValidateHeightField(f), Error);
+}
+
+namespace {
+std::string ErrorOf(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "";
+}
+}  // namespace
+
+TEST(ImageIo, OnlyRegularFilesAreRead) {
+    fs::path d = TempDir();
+    fs::create_directories(d / "dir.png");
+    ASSERT_EQ(::mkfifo((d / "fifo.png").c_str(), 0600), 0);
+    std::string e = ErrorOf([&] { LoadHeightMap((d / "dir.png").string(), {}); });
+    EXPECT_NE(e.find("is a directory"), std::string::npos) << e;
+    e = ErrorOf([&] { LoadHeightMap((d / "fifo.png").string(), {}); });
+    EXPECT_NE(e.find("named pipe"), std::string::npos) << e;
+    e = ErrorOf([&] { LoadHeightMap("/dev/null", {}); });
+    EXPECT_NE(e.find("character device"), std::string::npos) << e;
+}
+
+TEST(ImageIo, ReadImageFileReportsFormatAndPicksChannels) {
+    fs::path d = TempDir();
+    std::string path = (d / "c.tga").string();
+    WriteWithOiio<uint8_t>(path, 2, 1, 4, OIIO::TypeDesc::UINT8, {10, 20, 30, 255, 40, 50, 60, 255});
+    int seen = 0;
+    ImageData img = ReadImageFile(path, "test", [&](int nc) {
+        seen = nc;
+        return std::pair<int, int>{1, 3};
+    }, true);
+    EXPECT_EQ(seen, 4);
+    EXPECT_EQ(img.format, "targa");
+    ASSERT_TRUE(img.is8);
+    ASSERT_EQ(img.channels, 2);
+    EXPECT_EQ(img.values8, (std::vector<uint8_t>{20, 30, 50, 60}));
+    // The picker's Error propagates unchanged.
+    std::string e = ErrorOf([&] {
+        ReadImageFile(path, "test", [](int) -> std::pair<int, int> { throw Error("mine"); }, true);
+    });
+    EXPECT_EQ(e, "mine");
+}
+
+TEST(ImageIo, DamageReportedByTheDecoderIsAnError) {
+    fs::path d = TempDir();
+    std::string path = (d / "t.tif").string();
+    std::vector<uint8_t> px(64 * 64);
+    for (size_t i = 0; i < px.size(); ++i) px[i] = uint8_t(i * 13);
+    WriteWithOiio<uint8_t>(path, 64, 64, 1, OIIO::TypeDesc::UINT8, px);
+    EXPECT_NO_THROW(LoadHeightMap(path, {}));
+    fs::resize_file(path, fs::file_size(path) - 100);
+    std::string e = ErrorOf([&] { LoadHeightMap(path, {}); });
+    EXPECT_NE(e.find("t.tif"), std::string::npos) << e;
+    EXPECT_EQ(e.find('\n'), std::string::npos) << e;
 }

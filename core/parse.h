@@ -1,0 +1,65 @@
+// Strict parsing of numbers given as text (command line, key=value settings, specs): the
+// whole text must be the number, and integers are range-checked before they are narrowed.
+#pragma once
+
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <system_error>
+
+#include "core/error.h"
+
+namespace reliefsim {
+
+/// A decimal integer that is the whole of `text` (optional leading '-', no spaces, no '+',
+/// no hex); nullopt when it is not one or does not fit in int64.
+inline std::optional<int64_t> ParseInt64(std::string_view text) {
+    int64_t v = 0;
+    auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (ec != std::errc() || ptr != text.data() + text.size() || text.empty())
+        return std::nullopt;
+    return v;
+}
+
+/// True when `text` consists of an optional '-' followed by decimal digits only.
+inline bool LooksLikeInteger(std::string_view text) {
+    if (!text.empty() && text.front() == '-') text.remove_prefix(1);
+    if (text.empty()) return false;
+    for (char c : text)
+        if (c < '0' || c > '9') return false;
+    return true;
+}
+
+/// Parses an integer in [lo, hi]; otherwise throws Error "SUBJECT "TEXT": WHY; expected an
+/// integer in [lo, hi]". `subject` names the option or parameter (e.g. "--size width").
+inline int64_t ParseIntInRange(std::string_view text, int64_t lo, int64_t hi,
+                               const std::string& subject) {
+    const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+    std::optional<int64_t> v = ParseInt64(text);
+    if (!v) {
+        const std::string why =
+            LooksLikeInteger(text) ? "is out of range" : "is not an integer";
+        throw Error(subject + " \"" + std::string(text) + "\": " + why +
+                    "; expected an integer in " + range);
+    }
+    if (*v < lo || *v > hi)
+        throw Error(subject + " \"" + std::string(text) + "\": is out of range; expected an "
+                    "integer in " + range);
+    return *v;
+}
+
+/// A finite decimal floating-point number that is the whole of `text`; nullopt otherwise
+/// (also for "inf", "nan" and values that overflow a float).
+inline std::optional<float> ParseFiniteFloat(std::string_view text) {
+    double v = 0.0;
+    auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (ec != std::errc() || ptr != text.data() + text.size() || text.empty() ||
+        !std::isfinite(v) || std::fabs(v) > 3.4028234663852886e38)
+        return std::nullopt;
+    return float(v);
+}
+
+}  // namespace reliefsim
