@@ -299,11 +299,12 @@ void OutputSet::Commit() {
                 created.push_back(dir);
                 continue;
             }
+            const int err = errno;
             struct stat st;
-            if (errno == EEXIST && ::stat(dir.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+            if (err == EEXIST && ::stat(dir.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
                 continue;  // made by an earlier destination, or meanwhile by someone else
             rollback(entries[i], "cannot create folder " + Quote(dir.string()) + " (" +
-                                     ErrnoText(errno) + "); nothing was written");
+                                     ErrnoText(err) + "); nothing was written");
         }
 
     // 3. Keep every file that is about to be replaced.
