@@ -149,7 +149,14 @@ void Run(const MapsOptions& o) {
     if (!enc)
         throw Error("--encoding \"" + o.encoding + "\": unknown; must be one of " +
                     ConeEncodingList());
-    if (!o.out.empty()) {
+    const bool mipKind = *kind == ConeKind::MinMip || *kind == ConeKind::MaxMip;
+    if (!o.out.empty() && mipKind) {
+        try {
+            CheckMipPyramidPath(o.out);  // one MIP-mapped file: .exr only
+        } catch (const Error& e) {
+            throw Error("--out " + std::string(e.what()));
+        }
+    } else if (!o.out.empty()) {
         const std::string ext = std::filesystem::path(o.out).extension().string();
         if (ext != ".exr" && ext != ".png")
             throw Error("--out \"" + o.out + "\": unsupported extension; expected .exr or .png");

@@ -382,7 +382,7 @@ TEST(BadInput, OutputLocationsThatCannotHoldTheOutputsAreRefusedBeforeWork) {
     ExpectFailure("render --size 8x8 --out " + Q(d / "res"), {"--out", "metrics.json"}, d);
     EXPECT_EQ(ReadBytes(d / "res" / "mine.txt"), "user data");
     EXPECT_FALSE(fs::exists(d / "res" / "color.png"));
-    ExpectFailure("maps --map builtin:shapes:16 --out " + Q(d / "nodir" / "m.exr"), {"--out"}, d);
+    ExpectFailure("maps --map builtin:shapes:16 --out " + Q(d / "file" / "m.exr"), {"--out"}, d);
     ExpectFailure("maps --map builtin:shapes:16 --out " + Q(d / "res"), {"--out"}, d);
 }
 
