@@ -226,6 +226,28 @@ TEST(LinearSearch, GrazingRaysTerminateFinite) {
 }
 
 TEST(ViewRay, StraightDownRayHasNoSlope) {
+    // View angle 0: the eye straight above the plane's centre, looking down (-z). The centre
+    // pixel of an odd-sized image has ndc (0, 0) exactly, so its ray is the forward vector:
+    // dirUv must vanish (tolerance 1e-7, far below one texel of any map) and the ray enters
+    // at the plane's centre.
+    for (int n : {1, 3, 257}) {
+        ViewUniforms u;
+        u.eye = {0.0f, 0.0f, 2.0f};
+        u.forward = {0.0f, 0.0f, -1.0f};
+        u.right = {0.4f, 0.0f, 0.0f};
+        u.up = {0.0f, 0.4f, 0.0f};
+        u.width = u.height = float(n);
+        u.tiling = 1.0f;
+        u.depthScale = 0.1f;
+        MarchInput in = PixelToRay(u, n / 2, n / 2);
+        EXPECT_NEAR(in.dirUv.x, 0.0f, 1e-7f) << n << "x" << n;
+        EXPECT_NEAR(in.dirUv.y, 0.0f, 1e-7f) << n << "x" << n;
+        EXPECT_NEAR(in.uvEntry.x, 0.5f, 1e-7f);
+        EXPECT_NEAR(in.uvEntry.y, 0.5f, 1e-7f);
+    }
+}
+
+TEST(ViewRay, CornerPixelSlopeIsMinusXyOverZTimesDepthScale) {
     ViewUniforms u;
     u.eye = {0.0f, 0.0f, 2.0f};
     u.forward = {0.0f, 0.0f, -1.0f};

@@ -149,12 +149,43 @@ TEST(Sampler, TexelFetchWrapsOrClamps) {
 }
 
 TEST(Sampler, NearestUsesFloatProductForTexelSelection) {
-    // research/llvmpipe.md §2.3: u = 0.5/7 -> 7u rounds to 0.5 in float: texel 0, while the
-    // exact product is just below 0.5 as well; u just below 1/7 must stay in texel 0.
-    HeightField f = Make(7, 1, {0, 1, 2, 3, 4, 5, 6});
-    Sampler<false> s(f, {Filter::Nearest, WrapMode::Clamp});
-    EXPECT_EQ(s.Sample({std::nextafter(1.0f / 7.0f, 0.0f), 0.5f}), 0.0f);
-    EXPECT_EQ(s.Sample({6.5f / 7.0f, 0.5f}), 6.0f);
+    // research/llvmpipe.md §2.3: the nearest texel is trunc(float(u) * n), the product rounded
+    // to float. Search the u just beside each boundary k/n for one where rounding the product
+    // to float crosses the boundary that the exact (double) product stays below; the sampler
+    // must pick the float texel, which differs from the double one, so a sampler computing
+    // the index in double fails here.
+    int nFound = 0;
+    for (int n : {3, 5, 7, 11, 13, 25, 100, 255}) {
+        std::vector<float> depth(static_cast<size_t>(n));
+        for (int i = 0; i < n; ++i) depth[size_t(i)] = float(i);
+        HeightField f = Make(n, 1, depth);
+        for (WrapMode wrap : {WrapMode::Clamp, WrapMode::Repeat}) {
+            Sampler<false> s(f, {Filter::Nearest, wrap});
+            for (int k = 1; k < n; ++k) {
+                float u = float(k) / float(n);
+                for (int step = 0; step < 4; ++step, u = std::nextafter(u, 0.0f)) {
+                    const int iFloat = int(std::floor(u * float(n)));
+                    const int iDouble = int(std::floor(double(u) * double(n)));
+                    if (iFloat == iDouble) continue;
+                    ++nFound;
+                    EXPECT_EQ(s.Sample({u, 0.5f}), float(iFloat))
+                        << "n " << n << ", u " << u << " (double texel " << iDouble << ")";
+                }
+            }
+        }
+    }
+    EXPECT_GT(nFound, 0) << "no u with floorf(u*n) != floor(double(u)*n): the test is vacuous";
+    // A known case: u = 7/11 rounded to float is 0x1.45d174p-1, just below 7/11; the exact
+    // product 11u = 6.99999988... (texel 6) rounds to 7.0f in float (texel 7).
+    const float u11 = 7.0f / 11.0f;
+    ASSERT_EQ(std::floor(u11 * 11.0f), 7.0f);
+    ASSERT_EQ(std::floor(double(u11) * 11.0), 6.0);
+    HeightField f11 = Make(11, 1, {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10});
+    for (WrapMode wrap : {WrapMode::Clamp, WrapMode::Repeat}) {
+        Sampler<false> s11(f11, {Filter::Nearest, wrap});
+        EXPECT_EQ(s11.Sample({u11, 0.5f}), 7.0f);
+        EXPECT_EQ(s11.Sample({10.5f / 11.0f, 0.5f}), 10.0f);
+    }
 }
 
 TEST(Sampler, HugeCoordinatesStayInRange) {
