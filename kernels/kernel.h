@@ -27,8 +27,8 @@ struct MarchResult {
     bool budgetExhausted = false;  ///< stopped by the fetch budget; the point is the estimate then
 };
 
-/// What a kernel needs of a height sampler (texture/sampler.h satisfies it; so will the
-/// SIMD sampler of the performance work, one lane at a time).
+/// What a kernel needs of a height sampler: one Sample(uv) returning depth in [0,1]. Both
+/// instantiations of texture/sampler.h's Sampler (counted and uncounted) satisfy it.
 template <typename S>
 concept HeightSampler = requires(S s, glm::vec2 uv) {
     { s.Sample(uv) } -> std::convertible_to<float>;

@@ -169,8 +169,8 @@ RS_INLINE int WrapNearest(float u, int n, WrapMode wrap) {
 /// Binds a HeightField, a SamplerState and (when kCount) a FetchCounts. Entry points mirror
 /// GLSL: Sample (by the state's filter), TexelFetch. Every texel read goes through Texel(),
 /// the one place that counts. Sampler<false> is the uncounted baseline for benchmarks.
-/// A later SIMD path runs 8 lanes through Sampler8 with one FetchCounts per lane; kernels are
-/// templated on the sampler so they compile against either.
+/// Kernels are templated on the sampler (kernels/kernel.h HeightSampler), so Sampler<true> and
+/// Sampler<false> run the same kernel body.
 template <bool kCount>
 class Sampler {
 public:
