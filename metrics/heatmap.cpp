@@ -6,7 +6,6 @@
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -42,13 +41,15 @@ void WriteStaged(const std::string& what, const std::string& path, OutputSet* ou
     OutputSet& set = outputs ? *outputs : own;
     const std::string reason = write(set.Add(path));
     if (!reason.empty())
-        throw Error(what + " " + Quote(path) + ": cannot write (" + set.UserFacing(reason) +
+        throw Error(what + " " + Quote(path) + ": cannot write (" +
+                    set.UserFacing(reason) +
                     "); nothing was written; hint: check the free space");
     if (!outputs) own.Commit();
 }
 
-/// Writes float pixels (spec.nchannels interleaved, row 0 at the top) to `tempPath` in the
-/// given OIIO format, converting to spec.format. Returns "" on success, else the reason.
+/// Writes float pixels (spec.nchannels interleaved, row 0 at the top) to `tempPath` in
+/// the given OIIO format, converting to spec.format. Returns "" on success, else the
+/// reason.
 std::string WriteImageFile(const std::string& tempPath, const char* format,
                            const OIIO::ImageSpec& spec, const float* pixels) {
     auto out = OIIO::ImageOutput::create(format);
@@ -71,15 +72,25 @@ void CheckSize(const std::string& what, const std::string& path, int width, int 
                     " is empty; expected width > 0 and height > 0");
 }
 
-// ---- Text ----------------------------------------------------------------------------
+// ---- Drawing -------------------------------------------------------------------------
+// The output is assembled in an RGB float ImageBuf (row 0 at the top, pixel (0, 0) at the
+// top-left, ROI ends exclusive but render_box/render_line corners inclusive) and
+// converted to 8 bits only when written, so image and colour bar keep color_map's exact
+// floats.
 
-/// The TrueType font used for legend text, or "" when none can be loaded (then tick
-/// labels use the bitmap font below). Probed once per process.
+namespace IBA = OIIO::ImageBufAlgo;
+
+constexpr float kWhite[3] = {1.0f, 1.0f, 1.0f};
+constexpr float kBlack[3] = {0.0f, 0.0f, 0.0f};
+constexpr float kGrey[3] = {kMaskGrey, kMaskGrey, kMaskGrey};
+
+/// The TrueType font used for legend text, or "" when none can be loaded (then the
+/// legend has no text, only the bar and its ticks). Probed once per process.
 const std::string& LegendFont() {
     static const std::string font = [] {
         std::string found;
         for (const char* candidate : {kFontPath, "DejaVuSans", ""}) {
-            if (OIIO::ImageBufAlgo::text_size("0.5", 12, candidate).defined()) {
+            if (IBA::text_size("0.5", 12, candidate).defined()) {
                 found = candidate[0] ? candidate : "<default>";
                 break;
             }
@@ -96,110 +107,41 @@ std::string FontArg() {
     return f == "<default>" ? std::string() : f;
 }
 
-/// 5x7 bitmap glyphs for the characters a number needs, one byte per row, bit 4 = left.
-struct Glyph {
-    char c;
-    std::array<uint8_t, 7> rows;
-};
-constexpr Glyph kGlyphs[] = {
-    {'0', {0x0E, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0E}},
-    {'1', {0x04, 0x0C, 0x04, 0x04, 0x04, 0x04, 0x0E}},
-    {'2', {0x0E, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1F}},
-    {'3', {0x1F, 0x02, 0x04, 0x02, 0x01, 0x11, 0x0E}},
-    {'4', {0x02, 0x06, 0x0A, 0x12, 0x1F, 0x02, 0x02}},
-    {'5', {0x1F, 0x10, 0x1E, 0x01, 0x01, 0x11, 0x0E}},
-    {'6', {0x06, 0x08, 0x10, 0x1E, 0x11, 0x11, 0x0E}},
-    {'7', {0x1F, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08}},
-    {'8', {0x0E, 0x11, 0x11, 0x0E, 0x11, 0x11, 0x0E}},
-    {'9', {0x0E, 0x11, 0x11, 0x0F, 0x01, 0x02, 0x0C}},
-    {'.', {0x00, 0x00, 0x00, 0x00, 0x00, 0x0C, 0x0C}},
-    {'-', {0x00, 0x00, 0x00, 0x1F, 0x00, 0x00, 0x00}},
-    {'+', {0x00, 0x04, 0x04, 0x1F, 0x04, 0x04, 0x00}},
-    {'e', {0x00, 0x00, 0x0E, 0x11, 0x1F, 0x10, 0x0E}},
-};
-
-int BitmapScale(int fontSize) { return std::max(1, fontSize / 9); }
-
-/// An RGB float canvas (row 0 at the top) that the legend is drawn into.
-struct Canvas {
-    int width = 0, height = 0;
-    std::vector<float> px;  // 3 floats per pixel
-
-    Canvas(int w, int h) : width(w), height(h), px(size_t(w) * size_t(h) * 3, 1.0f) {}
-    void Set(int x, int y, float r, float g, float b) {
-        if (x < 0 || y < 0 || x >= width || y >= height) return;
-        float* p = &px[(size_t(y) * size_t(width) + size_t(x)) * 3];
-        p[0] = r;
-        p[1] = g;
-        p[2] = b;
-    }
-    OIIO::ImageBuf Wrap() {
-        return OIIO::ImageBuf(OIIO::ImageSpec(width, height, 3, OIIO::TypeDesc::FLOAT),
-                              px.data());
-    }
-};
-
-/// Width in pixels of `text` at `fontSize`.
+/// Width in pixels of `text` at `fontSize`; 0 without a font (the text is left out).
 int TextWidth(const std::string& text, int fontSize) {
-    if (LegendFont().empty()) return int(text.size()) * 6 * BitmapScale(fontSize);
-    OIIO::ROI r = OIIO::ImageBufAlgo::text_size(text, fontSize, FontArg());
-    return r.defined() ? r.width() : int(text.size()) * fontSize;
+    if (LegendFont().empty() || text.empty()) return 0;
+    const OIIO::ROI r = IBA::text_size(text, fontSize, FontArg());
+    return r.defined() ? r.width() : 0;
 }
 
-/// Draws black `text` with its left edge at x, vertically centred on y.
-void DrawText(Canvas& canvas, int x, int y, const std::string& text, int fontSize) {
-    if (!LegendFont().empty()) {
-        OIIO::ImageBuf buf = canvas.Wrap();
-        const float black[3] = {0.0f, 0.0f, 0.0f};
-        if (OIIO::ImageBufAlgo::render_text(buf, x, y, text, fontSize, FontArg(), black,
-                                            OIIO::ImageBufAlgo::TextAlignX::Left,
-                                            OIIO::ImageBufAlgo::TextAlignY::Center))
-            return;
-        buf.geterror();  // fall through to the bitmap font
-    }
-    const int s = BitmapScale(fontSize);
-    const int top = y - 7 * s / 2;
-    for (size_t i = 0; i < text.size(); ++i) {
-        const Glyph* glyph = nullptr;
-        for (const Glyph& g : kGlyphs)
-            if (g.c == text[i]) glyph = &g;
-        if (!glyph) continue;
-        const int left = x + int(i) * 6 * s;
-        for (int row = 0; row < 7; ++row)
-            for (int col = 0; col < 5; ++col)
-                if (glyph->rows[size_t(row)] & (0x10 >> col))
-                    for (int dy = 0; dy < s; ++dy)
-                        for (int dx = 0; dx < s; ++dx)
-                            canvas.Set(left + col * s + dx, top + row * s + dy, 0.0f,
-                                       0.0f, 0.0f);
-    }
+/// Draws black `text` with its left edge at x, vertically centred on y. Without a font,
+/// or if FreeType fails, the text is left out and the canvas is unchanged.
+void DrawText(OIIO::ImageBuf& canvas, int x, int y, const std::string& text,
+              int fontSize) {
+    if (LegendFont().empty() || text.empty()) return;
+    if (!IBA::render_text(canvas, x, y, text, fontSize, FontArg(), kBlack,
+                          IBA::TextAlignX::Left, IBA::TextAlignY::Center))
+        canvas.geterror();  // clear it: a legend without this label is still usable
 }
 
-/// Draws black `text` rotated to read bottom to top, centred on (cx, cy). Returns false
-/// when no TrueType font is available (the bitmap font has no letters).
-bool DrawVerticalText(Canvas& canvas, int cx, int cy, const std::string& text,
+/// Draws black `text` on white, rotated to read bottom to top, centred on (cx, cy).
+/// render_text cannot rotate, so the text is rendered into a buffer of its own, turned
+/// with rotate270 and pasted. Without a font, or if FreeType fails, nothing is drawn.
+void DrawVerticalText(OIIO::ImageBuf& canvas, int cx, int cy, const std::string& text,
                       int fontSize) {
-    if (LegendFont().empty() || text.empty()) return false;
-    OIIO::ROI size = OIIO::ImageBufAlgo::text_size(text, fontSize, FontArg());
-    if (!size.defined()) return false;
-    const int w = size.width() + 4, h = size.height() + 4;
-    OIIO::ImageBuf line(OIIO::ImageSpec(w, h, 3, OIIO::TypeDesc::FLOAT));
-    const float white[3] = {1.0f, 1.0f, 1.0f}, black[3] = {0.0f, 0.0f, 0.0f};
-    OIIO::ImageBufAlgo::fill(line, white);
-    if (!OIIO::ImageBufAlgo::render_text(line, 2 - size.xbegin, 2 - size.ybegin, text,
-                                         fontSize, FontArg(), black))
-        return false;
+    if (LegendFont().empty() || text.empty()) return;
+    const OIIO::ROI size = IBA::text_size(text, fontSize, FontArg());
+    if (!size.defined()) return;
+    const int w = size.width() + 4, h = size.height() + 4;  // 2 px margin each side
+    OIIO::ImageBuf line = IBA::fill(kWhite, OIIO::ROI(0, w, 0, h, 0, 1, 0, 3));
+    // text_size is relative to the baseline's left end; shift its box to (2, 2).
+    if (!IBA::render_text(line, 2 - size.xbegin, 2 - size.ybegin, text, fontSize,
+                          FontArg(), kBlack))
+        return;
     // rotate270 turns the row "AB" into the column B-over-A: the text reads upwards.
-    OIIO::ImageBuf rotated = OIIO::ImageBufAlgo::rotate270(line);
-    std::vector<float> px(size_t(w) * size_t(h) * 3);
-    rotated.get_pixels(rotated.roi(), OIIO::TypeDesc::FLOAT, px.data());
-    const int x0 = cx - h / 2, y0 = cy - w / 2;  // rotated image is h wide, w tall
-    for (int y = 0; y < w; ++y)
-        for (int x = 0; x < h; ++x) {
-            const float* p = &px[(size_t(y) * size_t(h) + size_t(x)) * 3];
-            canvas.Set(x0 + x, y0 + y, p[0], p[1], p[2]);
-        }
-    return true;
+    OIIO::ImageBuf rotated = IBA::rotate270(line);
+    rotated.set_origin(0, 0);  // paste() places the buffer's (0, 0); it is h wide, w tall
+    IBA::paste(canvas, cx - h / 2, cy - w / 2, 0, 0, rotated);
 }
 
 // ---- Ticks ---------------------------------------------------------------------------
@@ -253,11 +195,24 @@ std::vector<Tick> ComputeTicks(double lo, double hi, int targetIntervals, double
 
 // ---- Colour mapping ------------------------------------------------------------------
 
-/// Maps values through the colormap into 3 floats per pixel. NaN and masked pixels are
-/// grey. Throws Error for an unknown colormap.
-std::vector<float> MapColors(const std::string& path, const float* values,
-                             const uint8_t* mask, int width, int height,
-                             const HeatmapScale& scale) {
+/// color_map of the single-channel `t` image through `colormap`, as RGB floats. Both the
+/// heatmap and its colour bar go through here, so equal t gives equal colours. Throws
+/// Error for an unknown colormap.
+OIIO::ImageBuf ColorMapT(const std::string& path, const OIIO::ImageBuf& t,
+                         const std::string& colormap) {
+    OIIO::ImageBuf rgb = IBA::color_map(t, 0, colormap);
+    if (rgb.has_error() || rgb.nchannels() != 3)
+        throw Error("heatmap " + Quote(path) + ": colormap " + Quote(colormap) +
+                    " is unknown (" + rgb.geterror() +
+                    "); must be one of: " + kColormapNames);
+    return rgb;
+}
+
+/// The heatmap: t = clamp((v - min) / (max - min), 0, 1) through the colormap, with NaN
+/// and masked pixels grey.
+OIIO::ImageBuf MapColors(const std::string& path, const float* values,
+                         const uint8_t* mask, int width, int height,
+                         const HeatmapScale& scale) {
     const size_t n = size_t(width) * size_t(height);
     const double lo = double(scale.min), range = double(scale.max) - double(scale.min);
     std::vector<float> t(n);
@@ -265,26 +220,33 @@ std::vector<float> MapColors(const std::string& path, const float* values,
         const double v = double(values[i]);
         t[i] = std::isnan(v) ? 0.0f : float(std::clamp((v - lo) / range, 0.0, 1.0));
     }
-    OIIO::ImageBuf tBuf(OIIO::ImageSpec(width, height, 1, OIIO::TypeDesc::FLOAT),
-                        t.data());
-    OIIO::ImageBuf rgb = OIIO::ImageBufAlgo::color_map(tBuf, 0, scale.colormap);
-    if (rgb.has_error() || rgb.nchannels() != 3)
-        throw Error("heatmap " + Quote(path) + ": colormap " + Quote(scale.colormap) +
-                    " is unknown (" + rgb.geterror() +
-                    "); must be one of: " + kColormapNames);
-    std::vector<float> out(n * 3);
-    rgb.get_pixels(OIIO::ROI(0, width, 0, height, 0, 1, 0, 3), OIIO::TypeDesc::FLOAT,
-                   out.data());
-    for (size_t i = 0; i < n; ++i)
-        if ((mask && mask[i] == 0) || std::isnan(values[i]))
-            out[3 * i] = out[3 * i + 1] = out[3 * i + 2] = kMaskGrey;
-    return out;
+    const OIIO::ImageBuf tBuf(OIIO::ImageSpec(width, height, 1, OIIO::TypeDesc::FLOAT),
+                              t.data());
+    OIIO::ImageBuf rgb = ColorMapT(path, tBuf, scale.colormap);
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            const size_t i = size_t(y) * size_t(width) + size_t(x);
+            if ((mask && mask[i] == 0) || std::isnan(values[i]))
+                rgb.setpixel(x, y, kGrey);
+        }
+    return rgb;
+}
+
+/// The colour bar, barWidth x barLength: a vertical gradient fill of t from 1 (top row)
+/// to 0 (bottom row), so row i holds t = 1 - i / (barLength - 1), through ColorMapT.
+OIIO::ImageBuf ColorBar(const std::string& path, int barWidth, int barLength,
+                        const std::string& colormap) {
+    const float top[1] = {1.0f}, bottom[1] = {0.0f};
+    const OIIO::ImageBuf t =
+        IBA::fill(top, bottom, OIIO::ROI(0, barWidth, 0, barLength, 0, 1, 0, 1));
+    return ColorMapT(path, t, colormap);
 }
 
 }  // namespace
 
 void WriteHeatmapPng(const std::string& path, const float* values, const uint8_t* mask,
-                     int width, int height, const HeatmapScale& scale, OutputSet* outputs) {
+                     int width, int height, const HeatmapScale& scale,
+                     OutputSet* outputs) {
     CheckSize("heatmap", path, width, height);
     if (!values)
         throw Error("heatmap " + Quote(path) + ": values is null; expected data");
@@ -294,7 +256,7 @@ void WriteHeatmapPng(const std::string& path, const float* values, const uint8_t
                     ", " + std::to_string(scale.max) +
                     "] is invalid; expected finite min < max; hint: pass the fixed range "
                     "shared by all images that are compared, never a per-image one");
-    const std::vector<float> image = MapColors(path, values, mask, width, height, scale);
+    const OIIO::ImageBuf image = MapColors(path, values, mask, width, height, scale);
 
     // Legend geometry (see heatmap.h). The panel is laid out in its own coordinates.
     const bool right = height >= kMinHeightForRightLegend;
@@ -319,63 +281,49 @@ void WriteHeatmapPng(const std::string& path, const float* values, const uint8_t
         tickTextWidth = std::max(tickTextWidth, TextWidth(t.text, fontSize));
     // The label runs along the bar; shrink its font until it fits the bar's length.
     int labelSize = fontSize;
-    const bool hasLabel = !scale.label.empty() && !LegendFont().empty();
+    const bool hasLabel = TextWidth(scale.label, labelSize) > 0;
     while (hasLabel && labelSize > 9 && TextWidth(scale.label, labelSize) > barLength)
         --labelSize;
     const int labelThickness = hasLabel ? labelSize * 5 / 4 + 4 : 0;
 
-    const int barX = pad + 1;  // + 1 for the frame
-    const int tickTextX = barX + barWidth + 1 + tickLength + gap;
+    const int barX = pad + 1;               // + 1 for the frame
+    const int tickX = barX + barWidth + 1;  // first tick pixel, right of the frame
+    const int tickTextX = tickX + tickLength + gap;
     const int labelCenterX = tickTextX + tickTextWidth + 2 * gap + labelThickness / 2;
     const int panelWidth =
         tickTextX + tickTextWidth + (hasLabel ? 2 * gap + labelThickness : 0) + pad;
 
+    // Panel coordinates (px, py) are canvas (panelX + px, panelY + py).
     const int panelX = right ? width : 0, panelY = right ? 0 : height;
-    Canvas canvas(right ? width + panelWidth : std::max(width, panelWidth),
-                  right ? height : height + panelHeight);
-    for (int y = 0; y < height; ++y)
-        for (int x = 0; x < width; ++x) {
-            const float* p = &image[(size_t(y) * size_t(width) + size_t(x)) * 3];
-            canvas.Set(x, y, p[0], p[1], p[2]);
-        }
+    OIIO::ImageBuf canvas = IBA::fill(
+        kWhite, OIIO::ROI(0, right ? width + panelWidth : std::max(width, panelWidth), 0,
+                          right ? height : height + panelHeight, 0, 1, 0, 3));
+    IBA::paste(canvas, 0, 0, 0, 0, image);
 
-    // Colour bar: row y shows t = (barBottom - y) / (barLength - 1), through MapColors so
-    // that it matches the image exactly; a one-pixel black frame around it.
-    std::vector<float> ramp(static_cast<size_t>(barLength));
-    for (int i = 0; i < barLength; ++i)
-        ramp[size_t(i)] =
-            float(double(scale.min) +
-                  range * double(barLength - 1 - i) / double(std::max(1, barLength - 1)));
-    ramp.front() = scale.max;
-    ramp.back() = scale.min;
-    const std::vector<float> rampRgb =
-        MapColors(path, ramp.data(), nullptr, 1, barLength, scale);
-    for (int i = 0; i < barLength; ++i)
-        for (int x = 0; x < barWidth; ++x)
-            canvas.Set(panelX + barX + x, panelY + barTop + i, rampRgb[size_t(i) * 3],
-                       rampRgb[size_t(i) * 3 + 1], rampRgb[size_t(i) * 3 + 2]);
-    for (int x = barX - 1; x <= barX + barWidth; ++x) {
-        canvas.Set(panelX + x, panelY + barTop - 1, 0.0f, 0.0f, 0.0f);
-        canvas.Set(panelX + x, panelY + barBottom + 1, 0.0f, 0.0f, 0.0f);
-    }
-    for (int y = barTop - 1; y <= barBottom + 1; ++y) {
-        canvas.Set(panelX + barX - 1, panelY + y, 0.0f, 0.0f, 0.0f);
-        canvas.Set(panelX + barX + barWidth, panelY + y, 0.0f, 0.0f, 0.0f);
-    }
+    // Colour bar rows barTop..barBottom, framed by a one-pixel black box just outside.
+    IBA::paste(canvas, panelX + barX, panelY + barTop, 0, 0,
+               ColorBar(path, barWidth, barLength, scale.colormap));
+    IBA::render_box(canvas, panelX + barX - 1, panelY + barTop - 1,
+                    panelX + barX + barWidth, panelY + barBottom + 1, kBlack);
 
-    // Ticks and their labels.
+    // Ticks at the row whose t is the tick's, and their labels.
     for (const Tick& t : ticks) {
-        const int y = barBottom - int(std::lround((t.value - double(scale.min)) / range *
-                                                  double(barLength - 1)));
-        for (int x = 0; x < tickLength; ++x)
-            canvas.Set(panelX + barX + barWidth + 1 + x, panelY + y, 0.0f, 0.0f, 0.0f);
-        DrawText(canvas, panelX + tickTextX, panelY + y, t.text, fontSize);
+        const int y = panelY + barBottom -
+                      int(std::lround((t.value - double(scale.min)) / range *
+                                      double(barLength - 1)));
+        IBA::render_line(canvas, panelX + tickX, y, panelX + tickX + tickLength - 1, y,
+                         kBlack);
+        DrawText(canvas, panelX + tickTextX, y, t.text, fontSize);
     }
     if (hasLabel)
         DrawVerticalText(canvas, panelX + labelCenterX, panelY + (barTop + barBottom) / 2,
                          scale.label, labelSize);
+    if (canvas.has_error())
+        throw Error("heatmap " + Quote(path) + ": cannot draw the legend (" +
+                    canvas.geterror() + "); nothing was written");
 
-    OIIO::ImageSpec spec(canvas.width, canvas.height, 3, OIIO::TypeDesc::UINT8);
+    const OIIO::ImageSpec& cs = canvas.spec();
+    OIIO::ImageSpec spec(cs.width, cs.height, 3, OIIO::TypeDesc::UINT8);
     // PNG text chunks hold strings only; %.9g round-trips a float exactly.
     char minText[32], maxText[32];
     std::snprintf(minText, sizeof(minText), "%.9g", double(scale.min));
@@ -384,8 +332,10 @@ void WriteHeatmapPng(const std::string& path, const float* values, const uint8_t
     spec.attribute("reliefsim:max", maxText);
     spec.attribute("reliefsim:colormap", scale.colormap);
     spec.attribute("reliefsim:label", scale.label);
+    // canvas owns contiguous float RGB pixels (IBA::fill allocated it).
+    const float* pixels = static_cast<const float*>(canvas.localpixels());
     WriteStaged("heatmap", path, outputs, [&](const std::string& tempPath) {
-        return WriteImageFile(tempPath, "png", spec, canvas.px.data());
+        return WriteImageFile(tempPath, "png", spec, pixels);
     });
 }
 
@@ -430,8 +380,8 @@ void WriteMultiChannelExr(const std::string& path, int width, int height,
     spec.alpha_channel = -1;  // a channel named "A" is data here, not coverage
     spec.attribute("compression", "zip");
     spec.attribute(kChannelOrderAttr, order);
-    // OpenImageIO stamps EXRs with the current time unless DateTime is set; an empty value
-    // writes none, so the same record gives the same bytes on every run.
+    // OpenImageIO stamps EXRs with the current time unless DateTime is set; an empty
+    // value writes none, so the same record gives the same bytes on every run.
     spec.attribute("DateTime", "");
     WriteStaged("exr", path, outputs, [&](const std::string& tempPath) {
         return WriteImageFile(tempPath, "openexr", spec, interleaved.data());

@@ -36,15 +36,16 @@ struct HeatmapScale {
 ///    it is a block 160 pixels tall below the image, and the output is as wide as the
 ///    wider of the two. Everything outside the image and the panel is white.
 ///  * Inside the panel, left to right: a vertical colour bar (scale.max at the top,
-///    scale.min at the bottom, drawn through the same mapping as the image, framed in
-///    black), tick marks with labels at min, max and "nice" values in between (1, 2 or
+///    scale.min at the bottom; row i of its n rows holds t = 1 - i / (n - 1), a vertical
+///    gradient fill put through the same color_map as the image; framed one pixel wide
+///    in black), tick marks with labels at min, max and "nice" values in between (1, 2 or
 ///    5 x 10^k steps, about 5 intervals, none crowding an end label; integers when min
 ///    and max are integers at least 2 apart), and scale.label written along the bar,
 ///    reading bottom to top, its font shrunk (down to 9 px) to fit the bar's length. The
 ///    panel is as wide as the bar, the widest tick label and the label text need.
 ///  * Text uses DejaVuSans through OIIO's FreeType text renderer, with the font size
-///    growing with the image height (12 to 22 px). If no TrueType font can be loaded,
-///    tick labels fall back to a built-in 5x7 bitmap font and the label text is left out.
+///    growing with the image height (12 to 22 px). If no TrueType font can be loaded (or
+///    FreeType fails), the text is left out; the bar, its frame and the tick marks stay.
 ///  * min, max, colormap and label are also recorded as PNG text metadata
 ///    ("reliefsim:min" and "reliefsim:max" as %.9g text, "reliefsim:colormap",
 ///    "reliefsim:label").

@@ -168,6 +168,115 @@ TEST(Heatmap, LegendEnlargesOutputBesideOrBelowTheImage) {
     }
 }
 
+/// The colour bar's interior and its one-pixel black frame, found by scanning the legend
+/// panel (whose top-left is (panelX, panelY)) along its middle row: the first black
+/// pixel is the frame's left side, the next one its right side.
+struct Bar {
+    int x0 = -1, x1 = -1, y0 = -1, y1 = -1;  // interior, inclusive, in output pixels
+};
+
+Bar FindBar(const Png& png, int panelX, int panelY) {
+    constexpr Rgb8 black = {0, 0, 0};
+    Bar bar;
+    const int midY = (panelY + png.height) / 2;
+    int left = -1, right = -1;
+    for (int x = panelX; x < png.width && right < 0; ++x)
+        if (png.At(x, midY) == black) (left < 0 ? left : right) = x;
+    if (left < 0 || right <= left + 1) return bar;
+    int top = -1, bottom = -1;
+    for (int y = panelY; y < png.height && bottom < 0; ++y)
+        if (png.At(left + 1, y) == black) (top < 0 ? top : bottom) = y;
+    if (top < 0 || bottom <= top + 1) return bar;
+    return {left + 1, right - 1, top + 1, bottom - 1};
+}
+
+TEST(Heatmap, ColourBarIsColorMapOfItsFramedGradient) {
+    // viridis: no colour of the map is black, so the frame can be found by colour.
+    const std::string dir = TestDir();
+    struct Case {
+        int width, height, panelX, panelY;  // legend to the right or below
+    };
+    for (const Case c : {Case{40, 200, 40, 0}, Case{180, 20, 0, 20}}) {
+        std::vector<float> values(size_t(c.width) * size_t(c.height), 0.25f);
+        const std::string path = dir + "/bar.png";
+        WriteHeatmapPng(path, values.data(), nullptr, c.width, c.height,
+                        {-3.0f, 7.5f, "viridis", "fetches per pixel"});
+        const Png png = ReadPng(path);
+        const Bar bar = FindBar(png, c.panelX, c.panelY);
+        ASSERT_GE(bar.x0, 0) << c.width << "x" << c.height << ": no framed bar";
+        ASSERT_GT(bar.y1, bar.y0 + 10);
+        // Row i of an n-row bar is the vertical gradient fill's t = 1 - i / (n - 1)
+        // (OIIO lerps top to bottom), mapped by color_map like the image pixels.
+        const int n = bar.y1 - bar.y0 + 1;
+        for (int i = 0; i < n; ++i) {
+            const float t = 1.0f - float(i) / float(n - 1);
+            for (int x = bar.x0; x <= bar.x1; ++x)
+                ASSERT_EQ(png.At(x, bar.y0 + i), MapColor("viridis", t))
+                    << "bar row " << i << " of " << n << ", x " << x;
+        }
+        EXPECT_EQ(png.At(bar.x0, bar.y0), MapColor("viridis", 1.0f));  // max at the top
+        EXPECT_EQ(png.At(bar.x0, bar.y1), MapColor("viridis", 0.0f));
+        // The frame is closed: one black pixel all round.
+        constexpr Rgb8 black = {0, 0, 0};
+        for (int x = bar.x0 - 1; x <= bar.x1 + 1; ++x) {
+            EXPECT_EQ(png.At(x, bar.y0 - 1), black) << "top frame x " << x;
+            EXPECT_EQ(png.At(x, bar.y1 + 1), black) << "bottom frame x " << x;
+        }
+        for (int y = bar.y0 - 1; y <= bar.y1 + 1; ++y) {
+            EXPECT_EQ(png.At(bar.x0 - 1, y), black) << "left frame y " << y;
+            EXPECT_EQ(png.At(bar.x1 + 1, y), black) << "right frame y " << y;
+        }
+    }
+}
+
+TEST(Heatmap, LegendHasTickMarksAndLabelsBesideTheBar) {
+    const std::string dir = TestDir();
+    std::vector<float> values(size_t(64) * 256, 1.0f);
+    WriteHeatmapPng(dir + "/t.png", values.data(), nullptr, 64, 256,
+                    {0.0f, 100.0f, "viridis", "iterations"});
+    const Png png = ReadPng(dir + "/t.png");
+    const Bar bar = FindBar(png, 64, 0);
+    ASSERT_GE(bar.x0, 0);
+    // Tick marks start right of the frame at the max (top) and min (bottom) rows.
+    constexpr Rgb8 black = {0, 0, 0}, white = {255, 255, 255};
+    EXPECT_EQ(png.At(bar.x1 + 2, bar.y0), black);
+    EXPECT_EQ(png.At(bar.x1 + 2, bar.y1), black);
+    EXPECT_EQ(png.At(png.width - 1, 0), white);  // the panel's background
+    // Right of the tick marks there is text exactly when a TrueType font loads (the
+    // writer's fallback leaves the text out and keeps the ticks).
+    bool hasFont = false;
+    for (const char* font :
+         {"/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf", "DejaVuSans", ""})
+        hasFont |= OIIO::ImageBufAlgo::text_size("0.5", 12, font).defined();
+    OIIO::geterror();
+    int dark = 0;
+    for (int y = 0; y < png.height; ++y)
+        for (int x = bar.x1 + 8; x < png.width; ++x) dark += png.At(x, y)[0] < 128;
+    if (hasFont)
+        EXPECT_GT(dark, 20) << "no tick label or title text drawn";
+    else
+        EXPECT_EQ(dark, 0) << "no font, yet something drawn beside the ticks";
+}
+
+TEST(Heatmap, PngIsByteIdenticalAcrossWrites) {
+    // Same input twice, a second apart: no time stamp, no randomness in the legend.
+    const std::string dir = TestDir();
+    std::vector<float> values(size_t(50) * 160);
+    for (size_t i = 0; i < values.size(); ++i) values[i] = float(i % 53) * 0.37f;
+    const std::vector<uint8_t> mask(values.size(), 1);
+    const HeatmapScale scale{0.0f, 20.0f, "inferno", "steps (coarse + refine)"};
+    WriteHeatmapPng(dir + "/a.png", values.data(), mask.data(), 50, 160, scale);
+    std::this_thread::sleep_for(std::chrono::milliseconds(1100));
+    WriteHeatmapPng(dir + "/b.png", values.data(), mask.data(), 50, 160, scale);
+    auto bytes = [](const std::string& p) {
+        std::ifstream f(p, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(f), {});
+    };
+    const std::string a = bytes(dir + "/a.png");
+    EXPECT_GT(a.size(), 100u);
+    EXPECT_EQ(a, bytes(dir + "/b.png"));
+}
+
 TEST(Heatmap, RecordsScaleInPngMetadata) {
     const std::string dir = TestDir();
     const float v = 3.0f;
@@ -236,7 +345,7 @@ TEST(Heatmap, ExrRoundTripsBitExactlyWithChannelNames) {
 
 TEST(Heatmap, UnwritablePathThrowsAndLeavesNoFile) {
     const std::string dir = TestDir();
-    std::ofstream(dir + "/file") << "x";  // a file where a folder would have to be
+    std::ofstream(dir + "/file") << "x";       // a file where a folder would have to be
     fs::create_directory(dir + "/taken.exr");  // a folder where the file goes
     const float v = 1.0f;
     const std::string png = dir + "/file/sub/h.png", color = dir + "/file/c.png",
