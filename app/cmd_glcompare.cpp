@@ -14,6 +14,7 @@
 #include "metrics/heatmap.h"
 #include "raster/camera.h"
 #include "raster/rasterizer.h"
+#include "raster/viewport_pieces.h"
 
 namespace reliefsim {
 
@@ -248,7 +249,13 @@ GlCompareResult RunGlCompare(const HeightField& field, const RenderSettings& s,
                 std::visit([&](const auto& k) { k.March(in, sampler); }, kernel);
                 fetches[i] = counts.nFetches;
             }
-        r.laneCost = CheckLaneCost(fetches, triangles, s.width, s.height, r.gl.lanes,
+        LaneTrips measured;
+        measured.blocksX = r.gl.lanes.blocksX;
+        measured.blocksY = r.gl.lanes.blocksY;
+        measured.nTriangles = r.gl.lanes.nTriangles;
+        measured.groupTrips = r.gl.lanes.groupTrips;
+        measured.groupRuns = r.gl.lanes.groupRuns;
+        r.laneCost = CheckLaneCost(fetches, triangles, s.width, s.height, measured,
                                    r.cpu.summary.laneFetches4x2);
     }
     return r;

@@ -10,7 +10,7 @@
 #include "app/pipeline.h"
 #include "app/render_options.h"
 #include "glref/gl_reference.h"
-#include "glref/record_compare.h"
+#include "metrics/record_compare.h"
 
 namespace reliefsim {
 

@@ -21,6 +21,7 @@
 
 #include "app/glcompare.h"
 #include "core/error.h"
+#include "metrics/record_compare.h"
 
 namespace {
 

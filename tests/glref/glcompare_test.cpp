@@ -9,6 +9,7 @@
 
 #include "app/glcompare.h"
 #include "core/error.h"
+#include "metrics/record_compare.h"
 #include "texture/image_io.h"
 
 namespace reliefsim {
@@ -213,13 +214,6 @@ TEST(GlReference, RejectsGpu8AndMissingDepth8) {
     } catch (const Error& e) {
         EXPECT_NE(std::string(e.what()).find("8-bit"), std::string::npos) << e.what();
     }
-}
-
-TEST(RecordCompare, UlpDistance) {
-    EXPECT_EQ(UlpDistance(1.0f, 1.0f), 0u);
-    EXPECT_EQ(UlpDistance(1.0f, std::nextafter(1.0f, 2.0f)), 1u);
-    EXPECT_EQ(UlpDistance(-0.0f, 0.0f), 1u);
-    EXPECT_EQ(UlpDistance(std::nextafter(0.0f, -1.0f), std::nextafter(0.0f, 1.0f)), 3u);
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
 // Bit-level comparison of two per-pixel records (the C++ frame loop vs the GL twin) and the
-// check of the llvmpipe lane-cost model against the lanes measured inside the shader.
+// check of the llvmpipe lane-cost model (4x2 lane groups per triangle) against measured trips.
 #pragma once
 
 #include <cstdint>
@@ -7,12 +7,7 @@
 
 #include <glm/vec2.hpp>
 
-#include <glm/mat4x4.hpp>
-
 #include "core/record.h"
-#include "glref/gl_reference.h"
-#include "raster/camera.h"
-#include "raster/mesh.h"
 
 namespace reliefsim {
 
@@ -53,21 +48,16 @@ uint64_t UlpDistance(float a, float b);
 RecordComparison CompareRecords(const FrameRecord& cpu, const FrameRecord& gl,
                                 int maxListed = 10);
 
-/// The mesh clipped in world space to the camera's side planes, each pulled in by 2^-12 of w
-/// (far less than half a pixel), and fan-triangulated from each polygon's first vertex.
-/// llvmpipe's draw module clips triangles that leave the viewport and rasterizes the pieces
-/// separately, so a 4x2 block on a piece boundary runs once per piece. The lane-cost run
-/// draws this pre-clipped mesh, so the pieces are explicit and identical in both paths: GL
-/// never clips again, and gl_PrimitiveID and the C++ triangle index name the same piece.
-/// (The record comparison draws the unclipped mesh: the new vertices can move a clipped edge
-/// by up to 1/256 pixel and flip the coverage of a pixel centre lying that close to it.)
-/// Only positions are kept.
-Mesh ClipMeshToViewport(const Mesh& mesh, const glm::mat4& clipFromWorld);
-
-/// gl_PrimitiveID of each covered pixel as the C++ rasterizer assigns it (triangle index),
-/// -1 where no triangle covers it.
-std::vector<int16_t> TrianglePerPixel(const Mesh& mesh, const Camera& camera, int width,
-                                      int height);
+/// Loop trips measured per 4x2 lane group (in glcompare: by the GL twin's in-shader counters,
+/// glref/gl_reference.h LaneMeasurement), as plain data.
+struct LaneTrips {
+    int blocksX = 0, blocksY = 0;  ///< 4x2 blocks across and down the image
+    int nTriangles = 0;            ///< triangles (pieces) of the drawn mesh
+    /// trips per (block, triangle): index ((by * blocksX) + bx) * nTriangles + triangle, with
+    /// block (bx, by) = pixels [4bx, 4bx+4) x rows [2by, 2by+2) (row 0 at the top).
+    std::vector<uint32_t> groupTrips;
+    uint64_t groupRuns = 0;  ///< group runs counted (per triangle, per block)
+};
 
 /// The lane-cost model against the measurement.
 struct LaneCostCheck {
@@ -92,11 +82,13 @@ struct LaneCostCheck {
     }
 };
 
-/// Model from C++ data: the fetches of each pixel (row 0 at the top) and the C++ triangle
-/// (piece) covering it (-1: none); the measurement from the GL frame. Requires
-/// lanes.available.
+/// Model from C++ data: the fetches of each pixel (row 0 at the top, width x height) and the
+/// triangle (piece) covering it (-1: none); the measurement: measured.groupTrips (its size is
+/// blocksX * blocksY * nTriangles) and measured.groupRuns. A group's model trips are the
+/// largest fetches of its covered pixels (one fetch per trip); lane fetches are 8 x trips,
+/// summed over groups. Throws Error when a pixel's group lies outside measured.groupTrips.
 LaneCostCheck CheckLaneCost(const std::vector<uint32_t>& fetches,
                             const std::vector<int16_t>& cpuTriangle, int width, int height,
-                            const LaneMeasurement& lanes, uint64_t summaryLaneFetches);
+                            const LaneTrips& measured, uint64_t summaryLaneFetches);
 
 }  // namespace reliefsim
