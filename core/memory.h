@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <string>
 
@@ -42,13 +43,31 @@ inline bool ReadMemAvailable(uint64_t& bytes) {
 
 }  // namespace detail
 
-/// Bytes this process can still allocate: the smallest of the kernel's MemAvailable, the
+/// RELIEFSIM_MEMORY_LIMIT (bytes, or with a K, M or G suffix: "512M"), when set: a cap the
+/// user (or a fuzzer, whose allocation limit the kernel does not know of) puts on a run.
+inline bool ReadMemoryLimitEnv(uint64_t& bytes) {
+    const char* text = std::getenv("RELIEFSIM_MEMORY_LIMIT");
+    if (!text || !*text) return false;
+    char* end = nullptr;
+    const unsigned long long v = std::strtoull(text, &end, 10);
+    if (end == text) return false;
+    uint64_t scale = 1;
+    if (*end == 'K' || *end == 'k') scale = 1ull << 10;
+    else if (*end == 'M' || *end == 'm') scale = 1ull << 20;
+    else if (*end == 'G' || *end == 'g') scale = 1ull << 30;
+    else if (*end != '\0') return false;
+    bytes = uint64_t(v) * scale;
+    return true;
+}
+
+/// Bytes this process can still allocate: the smallest of RELIEFSIM_MEMORY_LIMIT, the kernel's MemAvailable, the
 /// cgroup's limit minus its usage (v2 memory.max / memory.current, or v1), and the address-
 /// space and data-segment limits (RLIMIT_AS, RLIMIT_DATA, e.g. from `ulimit -v`). A source
 /// that cannot be read does not limit; with none readable the answer is UINT64_MAX.
 inline uint64_t AvailableMemoryBytes() {
     uint64_t best = UINT64_MAX, v = 0, used = 0;
-    if (detail::ReadMemAvailable(v)) best = v;
+    if (ReadMemoryLimitEnv(v)) best = v;
+    if (detail::ReadMemAvailable(v)) best = std::min(best, v);
     if (detail::ReadFirstNumber("/sys/fs/cgroup/memory.max", v)) {
         detail::ReadFirstNumber("/sys/fs/cgroup/memory.current", used);
         best = std::min(best, v > used ? v - used : 0);

@@ -17,6 +17,7 @@
 #include <set>
 
 #include "core/error.h"
+#include "core/hash.h"
 
 namespace reliefsim {
 
@@ -31,14 +32,6 @@ std::string Quote(const std::string& s) { return "\"" + s + "\""; }
 
 std::string ErrnoText(int e) { return std::strerror(e); }
 
-uint64_t Mix(uint64_t x) {
-    x ^= x >> 30;
-    x *= 0xbf58476d1ce4e5b9ull;
-    x ^= x >> 27;
-    x *= 0x94d049bb133111ebull;
-    x ^= x >> 31;
-    return x;
-}
 
 /// Six characters from [a-z0-9] that differ between calls and processes. The names never
 /// reach an output, so they need not be reproducible; O_EXCL / link() make them unique.
@@ -46,7 +39,7 @@ std::string RandomTag() {
     static std::atomic<uint64_t> counter{0};
     const uint64_t t =
         uint64_t(std::chrono::steady_clock::now().time_since_epoch().count());
-    uint64_t h = Mix(t ^ Mix(uint64_t(::getpid()) << 20 ^ counter.fetch_add(1)));
+    uint64_t h = Mix64(t ^ Mix64(uint64_t(::getpid()) << 20 ^ counter.fetch_add(1)));
     std::string tag(6, 'a');
     for (char& c : tag) {
         c = "abcdefghijklmnopqrstuvwxyz0123456789"[h % 36];

@@ -50,6 +50,10 @@ int Init() {
     // One thread: the fuzzer measures one input at a time and reports stay readable.
     OIIO::attribute("threads", 1);
     OIIO::attribute("exr_threads", 1);
+    // The loaders refuse images whose decode would not fit (core/memory.h); tell them about
+    // the fuzzer's own allocation limit (-malloc_limit_mb=2048), which the kernel cannot see,
+    // so a small file claiming a 16384x16384 image is refused, not decoded into 1 GiB.
+    setenv("RELIEFSIM_MEMORY_LIMIT", "512M", 0);
     return 0;
 }
 

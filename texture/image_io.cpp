@@ -193,12 +193,70 @@ private:
     size_t size_ = 0;
 };
 
+/// OpenEXR sizes its tables from the header's dataWindow while it opens a file, before
+/// anything can be checked, so a 400-byte file claiming a vast window costs gigabytes and
+/// seconds. This scan reads the headers the way the format defines them (attributes of
+/// name, type, int32 size, value, up to an empty name; multi-part files repeat headers up to
+/// an empty one) and refuses attributes that run past the end of the file and data windows
+/// over kMaxImageSide, before OpenEXR sees the file.
+void PrescanExrHeader(const unsigned char* p, size_t n, const std::string& subject) {
+    if (n < 8 || !(p[0] == 0x76 && p[1] == 0x2f && p[2] == 0x31 && p[3] == 0x01)) return;
+    const bool multipart = (p[5] & 0x10) != 0;  // version field bit 12
+    auto bad = [&](const std::string& why) {
+        throw Error(subject + ": is not a valid OpenEXR file (" + why + ")");
+    };
+    auto readString = [&](size_t& o) {
+        std::string t;
+        while (o < n && p[o] != 0 && t.size() < 256) t += char(p[o++]);
+        if (o >= n || p[o] != 0) bad("header truncated or name too long");
+        ++o;
+        return t;
+    };
+    auto readInt = [&](size_t o) {
+        uint32_t v = uint32_t(p[o]) | uint32_t(p[o + 1]) << 8 | uint32_t(p[o + 2]) << 16 |
+                     uint32_t(p[o + 3]) << 24;
+        return int32_t(v);
+    };
+    size_t o = 8;
+    for (int part = 0; part < 1024; ++part) {
+        if (o >= n) bad("header truncated");
+        if (multipart && part > 0 && p[o] == 0) return;  // the empty header ends the list
+        for (;;) {
+            if (o >= n) bad("header truncated");
+            if (p[o] == 0) {  // end of this header
+                ++o;
+                break;
+            }
+            const std::string name = readString(o);
+            const std::string type = readString(o);
+            if (o + 4 > n) bad("header truncated");
+            const int32_t size = readInt(o);
+            o += 4;
+            if (size < 0 || uint64_t(size) > n - o)
+                bad("attribute \"" + name + "\" claims " + std::to_string(size) +
+                    " bytes, past the end of the file");
+            if ((name == "dataWindow" || name == "displayWindow") && type == "box2i" &&
+                size == 16) {
+                const int64_t w = int64_t(readInt(o + 8)) - readInt(o) + 1;
+                const int64_t h = int64_t(readInt(o + 12)) - readInt(o + 4) + 1;
+                if (name == "dataWindow" && (w < 1 || h < 1 || w > kMaxImageSide || h > kMaxImageSide))
+                    throw Error(subject + ": header says " + std::to_string(w) + "x" +
+                                std::to_string(h) + ", outside 1.." + std::to_string(kMaxImageSide) +
+                                " pixels a side (llvmpipe's largest texture)");
+            }
+            o += size_t(size);
+        }
+        if (!multipart) return;
+    }
+}
+
 }  // namespace
 
 ImageData ReadImageFile(const std::string& path, const std::string& subject,
                         const ChannelPicker& pickChannels, bool keep8) {
     if (path.empty()) throw Error(subject + ": empty path; give an image file");
     MappedFile file(path, subject);
+    PrescanExrHeader(static_cast<const unsigned char*>(file.Data()), file.Size(), subject);
     OIIO::Filesystem::IOMemReader proxy(file.Data(), file.Size());
     StderrCapture capture;
     auto in = OIIO::ImageInput::open(path, nullptr, &proxy);

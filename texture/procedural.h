@@ -5,6 +5,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/hash.h"  // Mix64, used with the builtins
 #include "texture/height_field.h"
 
 namespace reliefsim {
@@ -23,14 +24,5 @@ HeightField MakeBuiltinMap(std::string_view spec);
 /// Makes a named builtin at width x height.
 HeightField MakeBuiltinMap(std::string_view name, int width, int height);
 
-/// 64-bit mix (splitmix64 finaliser): the project's hash for deterministic pseudo-randomness.
-inline uint64_t Mix64(uint64_t x) {
-    x ^= x >> 30;
-    x *= 0xbf58476d1ce4e5b9ull;
-    x ^= x >> 27;
-    x *= 0x94d049bb133111ebull;
-    x ^= x >> 31;
-    return x;
-}
 
 }  // namespace reliefsim

@@ -17,11 +17,14 @@
 #include "app/pipeline.h"
 #include "core/error.h"
 #include "tests/app/cli_util.h"
+#include "tests/common/fs_snapshot.h"
 #include "texture/mip_pyramid.h"
 #include "texture/procedural.h"
 
 using namespace reliefsim;
 namespace fs = std::filesystem;
+using reliefsim::testing::ExpectNoLeftovers;
+using reliefsim::testing::Snapshot;
 
 namespace {
 
@@ -53,31 +56,7 @@ Result RunShell(const std::string& prefix, const std::string& args,
     return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, Slurp(out), Slurp(err)};
 }
 
-/// Everything under `dir` by relative path: type and mode, size, mtime, inode, contents.
-std::map<std::string, std::string> Snapshot(const fs::path& dir) {
-    std::map<std::string, std::string> out;
-    if (!fs::exists(dir)) return out;
-    for (const auto& e : fs::recursive_directory_iterator(dir)) {
-        struct stat st;
-        EXPECT_EQ(::lstat(e.path().c_str(), &st), 0);
-        std::string v = std::to_string(st.st_mode) + " " + std::to_string(st.st_size) +
-                        " " + std::to_string(st.st_mtim.tv_sec) + "." +
-                        std::to_string(st.st_mtim.tv_nsec) + " " +
-                        std::to_string(st.st_ino);
-        if (S_ISREG(st.st_mode)) v += " " + Bytes(e.path());
-        out[fs::relative(e.path(), dir).string()] = v;
-    }
-    return out;
-}
 
-/// No temporary, backup or staging entry anywhere under `dir`.
-void ExpectNoLeftovers(const fs::path& dir) {
-    for (const auto& e : fs::recursive_directory_iterator(dir)) {
-        const std::string name = e.path().filename().string();
-        for (const char* bad : {"tmp", "staging", "rs-"})
-            EXPECT_EQ(name.find(bad), std::string::npos) << e.path();
-    }
-}
 
 /// A failed run: non-zero exit, one error line that names `culprit`.
 void ExpectOneLineFailure(const Result& r, const std::string& culprit) {

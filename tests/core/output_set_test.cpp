@@ -14,9 +14,12 @@
 #include <string>
 
 #include "core/error.h"
+#include "tests/common/fs_snapshot.h"
 
 using namespace reliefsim;
 namespace fs = std::filesystem;
+using reliefsim::testing::ExpectNoLeftovers;
+using reliefsim::testing::Snapshot;
 
 namespace {
 
@@ -41,31 +44,7 @@ std::string Get(const fs::path& p) {
 }
 
 /// Everything under `dir`: per relative path, its type, mode, size, mtime, inode and
-/// contents, so that "unchanged" means unchanged.
-std::map<std::string, std::string> Snapshot(const fs::path& dir) {
-    std::map<std::string, std::string> out;
-    for (const auto& e : fs::recursive_directory_iterator(dir)) {
-        struct stat st;
-        EXPECT_EQ(::lstat(e.path().c_str(), &st), 0);
-        std::string v = std::to_string(st.st_mode) + " " + std::to_string(st.st_size) +
-                        " " + std::to_string(st.st_mtim.tv_sec) + "." +
-                        std::to_string(st.st_mtim.tv_nsec) + " " +
-                        std::to_string(st.st_ino);
-        if (S_ISREG(st.st_mode)) v += " " + Get(e.path());
-        out[fs::relative(e.path(), dir).string()] = v;
-    }
-    return out;
-}
 
-/// No temporary or backup of ours (nor any "tmp"/"staging" name) anywhere under `dir`.
-void ExpectNoLeftovers(const fs::path& dir) {
-    for (const auto& e : fs::recursive_directory_iterator(dir)) {
-        const std::string name = e.path().filename().string();
-        EXPECT_EQ(name.find("rs-"), std::string::npos) << e.path();
-        EXPECT_EQ(name.find("tmp"), std::string::npos) << e.path();
-        EXPECT_EQ(name.find("staging"), std::string::npos) << e.path();
-    }
-}
 
 std::string ErrorOf(const std::function<void()>& f) {
     try {
