@@ -160,8 +160,7 @@ void RunGlCompareCommand(GlCompareArgs& a) {
     } else if (!a.heatmap.empty()) {
         CheckOutputFile("--heatmap", a.heatmap, /*folderIsCreated=*/false);
     }
-    // Two records, llvmpipe's two RGBA32F targets and their read-back, on top of a render.
-    if (a.tracePixel.empty()) RequireFrameMemory(s.width, s.height, 320);
+    if (a.tracePixel.empty()) RequireFrameMemory(s.width, s.height, kGlCompareBytesPerPixel);
     HeightField field = LoadRenderMap(a.options);
     if (!a.tracePixel.empty()) {
         const auto [x, y] = pixel;

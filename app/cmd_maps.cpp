@@ -192,11 +192,7 @@ void Run(const MapsOptions& o) {
     }
     if (!o.out.empty()) {
         CheckOutputFile("--out", o.out);
-        std::error_code ec;
-        const auto st = std::filesystem::symlink_status(StatsPath(o.out), ec);
-        if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st))
-            throw Error("--out \"" + o.out + "\": \"" + StatsPath(o.out) +
-                        "\" (its statistics) exists and is not a regular file");
+        CheckOutputDestination(StatsPath(o.out), "--out \"" + o.out + "\" (its statistics)");
     }
     if (!o.out.empty() && std::filesystem::path(o.out).extension() == ".png" &&
         *kind != ConeKind::Acm8 && ChannelCount(*kind, p) > 4)

@@ -10,22 +10,8 @@
 namespace {
 
 /// Every error is one line: embedded newlines (third-party messages) become "; ".
-std::string OneLine(std::string s) {
-    std::string out;
-    for (char c : s) {
-        if (c == '\n' || c == '\r') {
-            while (!out.empty() && out.back() == ' ') out.pop_back();
-            if (!out.empty() && out.back() != ' ' && out.back() != ';') out += "; ";
-        } else {
-            out += c;
-        }
-    }
-    while (!out.empty() && (out.back() == ' ' || out.back() == ';')) out.pop_back();
-    return out;
-}
-
 void PrintError(const std::string& message) {
-    std::fprintf(stderr, "reliefsim: error: %s\n", OneLine(message).c_str());
+    std::fprintf(stderr, "reliefsim: error: %s\n", reliefsim::OneLine(message).c_str());
 }
 
 }  // namespace

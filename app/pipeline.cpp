@@ -48,8 +48,9 @@ void ValidateSettings(const RenderSettings& s) {
             num(kMaxDistance) + "] plane widths");
     if (!(s.fovY > 0.0f && s.fovY < 180.0f))
         bad("--fov " + num(s.fovY) + ": must be in (0, 180) degrees");
-    if (s.threads < 0 || s.threads > 1024)
-        bad("--threads " + std::to_string(s.threads) + ": must be in [0, 1024]");
+    if (s.threads < 0 || s.threads > kMaxThreads)
+        bad("--threads " + std::to_string(s.threads) + ": must be in [0, " +
+            std::to_string(kMaxThreads) + "]");
     if (!std::isfinite(s.iterScaleMin) || !std::isfinite(s.iterScaleMax) ||
         !(s.iterScaleMax > s.iterScaleMin))
         bad("--iterations-scale: MIN and MAX must be finite with MAX > MIN");
@@ -59,16 +60,15 @@ void ValidateSettings(const RenderSettings& s) {
     ResolveParams(FindMethod(s.method), s.set);
 }
 
-uint64_t EstimateFrameBytes(int width, int height) {
-    constexpr uint64_t kBytesPerPixel = 112, kBaseBytes = 64ull << 20;
-    return kBaseBytes + kBytesPerPixel * uint64_t(std::max(width, 0)) * uint64_t(std::max(height, 0));
+uint64_t EstimateFrameBytes(int width, int height, uint64_t bytesPerPixel) {
+    constexpr uint64_t kBaseBytes = 64ull << 20;
+    return kBaseBytes +
+           bytesPerPixel * uint64_t(std::max(width, 0)) * uint64_t(std::max(height, 0));
 }
 
 void RequireFrameMemory(int width, int height, uint64_t bytesPerPixel) {
-    const uint64_t need = bytesPerPixel ? (64ull << 20) + bytesPerPixel * uint64_t(width) *
-                                                              uint64_t(height)
-                                        : EstimateFrameBytes(width, height);
-    RequireMemory(need, "--size " + std::to_string(width) + "x" + std::to_string(height),
+    RequireMemory(EstimateFrameBytes(width, height, bytesPerPixel),
+                  "--size " + std::to_string(width) + "x" + std::to_string(height),
                   "use a smaller --size");
 }
 

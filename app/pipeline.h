@@ -15,6 +15,9 @@
 
 namespace reliefsim {
 
+/// Most worker threads a run accepts (--threads).
+constexpr int kMaxThreads = 1024;
+
 /// Valid ranges of the scene settings beyond their natural bounds (so float arithmetic in
 /// the camera and rasterizer stays finite).
 constexpr float kMaxDepthScale = 100.0f;  ///< plane widths
@@ -42,17 +45,22 @@ struct RenderSettings {
 /// scales, method, parameters).
 void ValidateSettings(const RenderSettings& settings);
 
-/// Peak memory of one Render() plus WriteRenderOutputs() at width x height, from the
-/// record, the colour buffer and the output conversions (measured: about 107 bytes per
-/// pixel at 1024² and 2048², `/usr/bin/time -v reliefsim render --size 2048x2048`), plus a
-/// fixed base. The height map and derived maps come on top.
-uint64_t EstimateFrameBytes(int width, int height);
+/// Bytes per pixel of one Render() plus WriteRenderOutputs(): the record, the colour buffer
+/// and the output conversions (measured: about 107 bytes per pixel at 1024² and 2048²,
+/// `/usr/bin/time -v reliefsim render --size 2048x2048`). glcompare, which keeps two records
+/// and llvmpipe's targets and their read-back, needs kGlCompareBytesPerPixel.
+constexpr uint64_t kRenderBytesPerPixel = 112, kGlCompareBytesPerPixel = 320;
 
-/// Throws Error naming --size when a frame of that size needs more memory than is
-/// available (core/memory.h): "--size WxH: needs about 28.0 GiB of memory, 20.1 GiB
-/// available; use a smaller --size". `bytesPerPixel` overrides the render estimate
-/// (glcompare keeps two records and llvmpipe's targets).
-void RequireFrameMemory(int width, int height, uint64_t bytesPerPixel = 0);
+/// Peak memory of a frame of width x height at `bytesPerPixel`, plus a fixed base. The
+/// height map and derived maps come on top.
+uint64_t EstimateFrameBytes(int width, int height,
+                            uint64_t bytesPerPixel = kRenderBytesPerPixel);
+
+/// Throws Error naming --size when such a frame needs more memory than is available
+/// (core/memory.h): "--size WxH: needs about 28.0 GiB of memory, 20.1 GiB available; use a
+/// smaller --size".
+void RequireFrameMemory(int width, int height,
+                        uint64_t bytesPerPixel = kRenderBytesPerPixel);
 
 struct RenderOutput {
     FrameRecord record;

@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "core/error.h"
+#include "core/output_set.h"
 #include "core/parse.h"
 #include "raster/rasterizer.h"
 
@@ -114,65 +115,27 @@ std::pair<int, int> ParsePixel(const std::string& option, const std::string& tex
 }
 
 void CheckOutputFile(const std::string& option, const std::string& path, bool folderIsCreated) {
-    namespace fs = std::filesystem;
-    const fs::path p(path);
-    std::error_code ec;
-    if (p.filename().empty() || p.filename() == "." || p.filename() == "..")
-        throw Error(option + " \"" + path + "\": names a directory; expected a file name");
-    if (p.filename().string().size() > 200)
-        throw Error(option + " \"" + path + "\": file name too long (" +
-                    std::to_string(p.filename().string().size()) + " characters)");
-    const fs::file_status st = fs::status(p, ec);
-    if (fs::exists(st) && !fs::is_regular_file(st))
-        throw Error(option + " \"" + path + "\": exists and is not a regular file");
-    fs::path ancestor = fs::absolute(p, ec).lexically_normal().parent_path();
     if (!folderIsCreated) {
-        if (!fs::is_directory(ancestor, ec))
-            throw Error(option + " \"" + path + "\": folder \"" + ancestor.string() +
+        std::error_code ec;
+        const std::filesystem::path folder =
+            std::filesystem::absolute(path, ec).lexically_normal().parent_path();
+        if (!std::filesystem::is_directory(folder, ec))
+            throw Error(option + " \"" + path + "\": folder \"" + folder.string() +
                         "\" does not exist or is not a directory");
-        return;
     }
-    // The folder is created when missing; its nearest existing ancestor must be a directory.
-    while (ancestor.has_parent_path() && ancestor != ancestor.root_path() &&
-           !fs::exists(fs::status(ancestor, ec)))
-        ancestor = ancestor.parent_path();
-    if (!fs::is_directory(ancestor, ec))
-        throw Error(option + " \"" + path + "\": \"" + ancestor.string() +
-                    "\" is not a directory, so the file cannot be created there");
+    CheckOutputDestination(path, option);
 }
 
 void CheckOutputDirectory(const std::string& option, const std::string& dir,
                           const std::vector<std::string>& outputs) {
     namespace fs = std::filesystem;
     if (dir.empty()) throw Error(option + ": empty; give a directory");
-    const fs::path p(dir);
-    for (const fs::path& part : p)
-        if (part.string().size() > 255)
-            throw Error(option + " \"" + dir + "\": a path component is " +
-                        std::to_string(part.string().size()) +
-                        " characters long; the file system allows 255");
     std::error_code ec;
-    const fs::file_status st = fs::status(p, ec);
-    if (fs::exists(st)) {
-        if (!fs::is_directory(st))
-            throw Error(option + " \"" + dir + "\": exists and is not a directory");
-        for (const std::string& name : outputs) {
-            const fs::file_status o = fs::symlink_status(p / name, ec);
-            if (fs::exists(o) && !fs::is_regular_file(o))
-                throw Error(option + " \"" + dir + "\": \"" + name +
-                            "\" there is not a regular file (a directory or other entry "
-                            "stands where an output goes); nothing was written");
-        }
-        return;
-    }
-    // Not there yet: the nearest existing ancestor must be a directory.
-    fs::path ancestor = fs::absolute(p, ec).lexically_normal();
-    while (ancestor.has_parent_path() && ancestor != ancestor.root_path() &&
-           !fs::exists(fs::status(ancestor, ec)))
-        ancestor = ancestor.parent_path();
-    if (!fs::is_directory(ancestor, ec))
-        throw Error(option + " \"" + dir + "\": \"" + ancestor.string() +
-                    "\" is not a directory, so the folder cannot be created");
+    const fs::file_status st = fs::status(dir, ec);
+    if (fs::exists(st) && !fs::is_directory(st))
+        throw Error(option + " \"" + dir + "\": exists and is not a directory");
+    for (const std::string& name : outputs)
+        CheckOutputDestination((fs::path(dir) / name).string(), option);
 }
 
 HeightField LoadRenderMap(const RenderOptions& o) {

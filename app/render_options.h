@@ -23,9 +23,6 @@ struct RenderOptions {
     std::string iterScale, fetchScale;
 };
 
-/// Most worker threads --threads accepts.
-constexpr int kMaxThreads = 1024;
-
 /// Adds render's scene options (map, method, set, size, camera, sampler, texture format,
 /// threads and, when asked, the heatmap scales) to cmd. Output options (--out, --quiet) are
 /// the command's own. Commands that write no heatmap leave the scales out, so giving them
@@ -40,10 +37,9 @@ void ResolveRenderSettings(RenderOptions& options);
 std::pair<int, int> ParsePixel(const std::string& option, const std::string& text, int width,
                                int height);
 
-/// Checks, before any work, that `path` can receive an output file: nothing but a regular
-/// file stands at the path, the name is not too long, and its folder exists (or, when
-/// `folderIsCreated`, its nearest existing ancestor is a directory). Throws Error naming
-/// the option.
+/// Checks, before any work, that `path` can receive an output file (the checks of
+/// core/output_set.h CheckOutputDestination; with !folderIsCreated its folder must also
+/// exist already). Throws Error naming the option.
 void CheckOutputFile(const std::string& option, const std::string& path,
                      bool folderIsCreated = true);
 
@@ -54,10 +50,10 @@ inline const std::vector<std::string>& RenderOutputNames() {
     return kNames;
 }
 
-/// Checks, before any work, that `dir` can receive the outputs: not empty, no path
-/// component too long, it is a directory if it exists (and no output name in it is held by
-/// a directory or other non-regular entry), else its nearest existing ancestor is a
-/// directory. Throws Error naming the option.
+/// Checks, before any work, that `dir` can receive the outputs: not empty, a directory if
+/// it exists, and each output in it passes CheckOutputDestination (no directory or other
+/// non-regular entry where an output goes, names within the limits, parents that are
+/// folders). Throws Error naming the option.
 void CheckOutputDirectory(const std::string& option, const std::string& dir,
                           const std::vector<std::string>& outputs = RenderOutputNames());
 

@@ -1,11 +1,13 @@
 // Error type for bad input, and the checks used for invariants.
 #pragma once
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace reliefsim {
 
@@ -15,6 +17,33 @@ class Error : public std::runtime_error {
 public:
     explicit Error(const std::string& message) : std::runtime_error(message) {}
 };
+
+/// Text of several lines (third-party messages carry one line per libpng/libtiff report)
+/// as one line: lines trimmed of blanks and joined with "; ", repeated lines dropped, and,
+/// when maxChars > 0, cut to that length with "...".
+inline std::string OneLine(const std::string& text, size_t maxChars = 0) {
+    std::string out, line;
+    std::vector<std::string> seen;
+    auto flush = [&] {
+        const size_t b = line.find_first_not_of(" \t\r"), e = line.find_last_not_of(" \t\r");
+        if (b != std::string::npos) {
+            std::string l = line.substr(b, e - b + 1);
+            if (std::find(seen.begin(), seen.end(), l) == seen.end()) {
+                if (!out.empty()) out += "; ";
+                out += l;
+                seen.push_back(std::move(l));
+            }
+        }
+        line.clear();
+    };
+    for (char c : text) {
+        if (c == '\n') flush();
+        else line += c;
+    }
+    flush();
+    if (maxChars > 0 && out.size() > maxChars) out = out.substr(0, maxChars) + "...";
+    return out;
+}
 
 namespace detail {
 template <typename A, typename B>

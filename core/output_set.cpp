@@ -361,6 +361,10 @@ void OutputSet::Commit() {
     committed = true;
 }
 
+void CheckOutputDestination(const std::string& path, const std::string& subject) {
+    Inspect(subject, path, fs::path(path).lexically_normal());
+}
+
 void WriteFileAtomically(const std::string& path, std::string_view bytes,
                          const std::string& subject) {
     OutputSet set(subject);

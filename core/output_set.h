@@ -77,6 +77,13 @@ class OutputSet {
     std::function<int(size_t)> renameFault;
 };
 
+/// Checks, creating nothing, that `path` could receive an output file: exactly the checks
+/// OutputSet::Add makes (a file name, path and names within the system's limits, parents
+/// that are folders or can be created, nothing but a regular file at the destination).
+/// For validating a run's outputs before its work starts. Throws Error prefixed with
+/// `subject` when given.
+void CheckOutputDestination(const std::string& path, const std::string& subject = {});
+
 /// Writes `bytes` to `path` through a one-file OutputSet: the file is either complete or
 /// untouched. Throws Error (prefixed with `subject` when given).
 void WriteFileAtomically(const std::string& path, std::string_view bytes,

@@ -54,32 +54,6 @@ constexpr const char* kImageFormatList = "PNG, TGA, TIFF, EXR, JPEG, BMP, HDR, P
 
 std::string Quote(const std::string& s) { return "\"" + s + "\""; }
 
-/// Third-party text (OpenImageIO errors carry one line per libpng/libtiff message) as one
-/// line: newlines become "; ", runs of blanks one space, repeated messages dropped.
-std::string OneLine(const std::string& text) {
-    std::string out, line;
-    std::vector<std::string> seen;
-    auto flush = [&] {
-        size_t b = line.find_first_not_of(" \t\r"), e = line.find_last_not_of(" \t\r");
-        if (b != std::string::npos) {
-            std::string l = line.substr(b, e - b + 1);
-            if (std::find(seen.begin(), seen.end(), l) == seen.end()) {
-                if (!out.empty()) out += "; ";
-                out += l;
-                seen.push_back(l);
-            }
-        }
-        line.clear();
-    };
-    for (char c : text) {
-        if (c == '\n') flush();
-        else line += c;
-    }
-    flush();
-    if (out.size() > 400) out = out.substr(0, 400) + "...";
-    return out;
-}
-
 /// Redirects file descriptor 2 into a temporary file while an image is decoded: libpng's
 /// default error handler prints "libpng error: ..." straight to stderr, which would give
 /// the user a second, unrelated error line. What was captured goes into our one line.
@@ -265,7 +239,7 @@ ImageData ReadImageFile(const std::string& path, const std::string& subject,
         const std::string printed = capture.Finish();
         if (err.empty()) err = printed;
         throw Error(subject + ": is not a readable image (" +
-                    (err.empty() ? std::string("unknown or unsupported format") : OneLine(err)) +
+                    (err.empty() ? std::string("unknown or unsupported format") : OneLine(err, 400)) +
                     "); expected " + kImageFormatList);
     }
     const std::string format = in->format_name();
@@ -327,7 +301,7 @@ ImageData ReadImageFile(const std::string& path, const std::string& subject,
     if (!ok || !err.empty()) {
         if (!printed.empty()) err += "; " + printed;
         throw Error(subject + ": is damaged or truncated (" +
-                    (err.empty() ? std::string("the decoder stopped early") : OneLine(err)) +
+                    (err.empty() ? std::string("the decoder stopped early") : OneLine(err, 400)) +
                     ")");
     }
     return img;

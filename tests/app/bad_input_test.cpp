@@ -22,6 +22,8 @@ namespace fs = std::filesystem;
 using reliefsim::testing::CliResult;
 using reliefsim::testing::CountLines;
 using reliefsim::testing::RunCli;
+using reliefsim::testing::Slurp;
+using reliefsim::testing::WriteBytes;
 
 namespace {
 
@@ -29,15 +31,7 @@ fs::path Scratch() { return reliefsim::testing::Scratch("rs_bad_"); }
 
 std::string Q(const fs::path& p) { return "'" + p.string() + "'"; }
 
-void WriteBytes(const fs::path& p, const std::string& bytes) {
-    std::ofstream f(p, std::ios::binary);
-    f << bytes;
-}
 
-std::string ReadBytes(const fs::path& p) {
-    std::ifstream f(p, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(f), {});
-}
 
 /// Runs a failing command and checks the contract: non-zero exit, exactly one line on
 /// stderr that contains every culprit string, nothing at `out` (when given), and no
@@ -191,7 +185,7 @@ TEST(BadInput, TruncatedAndDamagedFilesAreRefusedOnOneLine) {
         } else {
             reliefsim::WriteRgb8Image(ok.string(), n, n, 1, px.data());
         }
-        const std::string bytes = ReadBytes(ok);
+        const std::string bytes = Slurp(ok);
         const fs::path cut = d / (std::string("cut.") + ext);
         WriteBytes(cut, bytes.substr(0, bytes.size() * 2 / 3));
         ExpectRenderFailure("--map " + Q(cut), {cut.filename().string()});
@@ -205,7 +199,7 @@ TEST(BadInput, TruncatedAndDamagedFilesAreRefusedOnOneLine) {
         v = uint8_t(x);
     }
     reliefsim::WriteRgb8Image((d / "ok.jpg").string(), big, big, 1, noise.data());
-    const std::string jpg = ReadBytes(d / "ok.jpg");
+    const std::string jpg = Slurp(d / "ok.jpg");
     WriteBytes(d / "cutscan.jpg", jpg.substr(0, jpg.size() * 2 / 3));
     ExpectRenderFailure("--map " + Q(d / "cutscan.jpg"), {"cutscan.jpg", "truncated"});
     // TIFFs whose strip is short, or whose data offset lies past the end of the file.
@@ -274,7 +268,7 @@ TEST(BadInput, FramesThatDoNotFitInMemoryAreRefusedBeforeWork) {
                             Q(out) + " >" + Q(d / "o.txt") + " 2>" + Q(d / "e.txt");
     const int status = std::system(("bash -c \"" + cmd + "\"").c_str());
     EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) != 0);
-    const std::string err = reliefsim::testing::Slurp(d / "e.txt");
+    const std::string err = Slurp(d / "e.txt");
     EXPECT_EQ(CountLines(err), 1) << err;
     for (const char* c : {"--size 8192x8192", "needs about", "available"})
         EXPECT_NE(err.find(c), std::string::npos) << err;
@@ -380,7 +374,7 @@ TEST(BadInput, OutputLocationsThatCannotHoldTheOutputsAreRefusedBeforeWork) {
     fs::create_directories(d / "res" / "metrics.json");
     WriteBytes(d / "res" / "mine.txt", "user data");
     ExpectFailure("render --size 8x8 --out " + Q(d / "res"), {"--out", "metrics.json"}, d);
-    EXPECT_EQ(ReadBytes(d / "res" / "mine.txt"), "user data");
+    EXPECT_EQ(Slurp(d / "res" / "mine.txt"), "user data");
     EXPECT_FALSE(fs::exists(d / "res" / "color.png"));
     ExpectFailure("maps --map builtin:shapes:16 --out " + Q(d / "file" / "m.exr"), {"--out"}, d);
     ExpectFailure("maps --map builtin:shapes:16 --out " + Q(d / "res"), {"--out"}, d);

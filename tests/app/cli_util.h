@@ -12,27 +12,14 @@
 #include <fstream>
 #include <string>
 
+#include "tests/common/test_files.h"
+
 namespace reliefsim::testing {
 
 struct CliResult {
     int exitCode;
     std::string out, err;
 };
-
-/// An empty folder named after the running test, under the GoogleTest temp dir.
-inline std::filesystem::path Scratch(const std::string& prefix) {
-    namespace fs = std::filesystem;
-    fs::path p = fs::path(::testing::TempDir()) /
-                 (prefix + ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(p);
-    fs::create_directories(p);
-    return p;
-}
-
-inline std::string Slurp(const std::filesystem::path& p) {
-    std::ifstream f(p);
-    return std::string(std::istreambuf_iterator<char>(f), {});
-}
 
 /// Runs `reliefsim ARGS`, capturing stdout and stderr in files under scratch.
 inline CliResult RunCli(const std::string& args, const std::filesystem::path& scratch) {

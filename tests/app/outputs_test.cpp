@@ -17,7 +17,7 @@
 #include "app/pipeline.h"
 #include "core/error.h"
 #include "tests/app/cli_util.h"
-#include "tests/common/fs_snapshot.h"
+#include "tests/common/test_files.h"
 #include "texture/mip_pyramid.h"
 #include "texture/procedural.h"
 

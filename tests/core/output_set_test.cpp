@@ -14,34 +14,20 @@
 #include <string>
 
 #include "core/error.h"
-#include "tests/common/fs_snapshot.h"
+#include "tests/common/test_files.h"
 
 using namespace reliefsim;
 namespace fs = std::filesystem;
 using reliefsim::testing::ExpectNoLeftovers;
+using reliefsim::testing::Slurp;
 using reliefsim::testing::Snapshot;
+using reliefsim::testing::WriteBytes;
 
 namespace {
 
-fs::path Scratch() {
-    fs::path p =
-        fs::path(::testing::TempDir()) /
-        ("rs_output_set_" +
-         std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(p);
-    fs::create_directories(p);
-    return p;
-}
+fs::path Scratch() { return reliefsim::testing::Scratch("rs_output_set_"); }
 
-void Put(const fs::path& p, const std::string& text) {
-    std::ofstream f(p, std::ios::binary);
-    f << text;
-}
 
-std::string Get(const fs::path& p) {
-    std::ifstream f(p, std::ios::binary);
-    return std::string(std::istreambuf_iterator<char>(f), {});
-}
 
 /// Everything under `dir`: per relative path, its type, mode, size, mtime, inode and
 
@@ -73,8 +59,8 @@ mode_t ModeOf(const fs::path& p) {
 
 TEST(OutputSet, CommitReplacesEveryFileAndKeepsOthers) {
     const fs::path d = Scratch();
-    Put(d / "a.txt", "old a");
-    Put(d / "notes.txt", "mine");
+    WriteBytes(d / "a.txt", "old a");
+    WriteBytes(d / "notes.txt", "mine");
     OutputSet set("--out");
     set.Write((d / "a.txt").string(), "new a");
     set.Write((d / "b.txt").string(), "new b");
@@ -82,14 +68,14 @@ TEST(OutputSet, CommitReplacesEveryFileAndKeepsOthers) {
     EXPECT_EQ(fs::path(temp).parent_path(), d);
     EXPECT_EQ(fs::path(temp).extension(), ".bin");  // writers that pick a format by it
     EXPECT_NE(temp.find(".rs-"), std::string::npos);
-    Put(temp, "new c");
-    EXPECT_EQ(Get(d / "a.txt"), "old a");  // nothing visible before Commit
+    WriteBytes(temp, "new c");
+    EXPECT_EQ(Slurp(d / "a.txt"), "old a");  // nothing visible before Commit
     EXPECT_FALSE(fs::exists(d / "b.txt"));
     set.Commit();
-    EXPECT_EQ(Get(d / "a.txt"), "new a");
-    EXPECT_EQ(Get(d / "b.txt"), "new b");
-    EXPECT_EQ(Get(d / "c.bin"), "new c");
-    EXPECT_EQ(Get(d / "notes.txt"), "mine");
+    EXPECT_EQ(Slurp(d / "a.txt"), "new a");
+    EXPECT_EQ(Slurp(d / "b.txt"), "new b");
+    EXPECT_EQ(Slurp(d / "c.bin"), "new c");
+    EXPECT_EQ(Slurp(d / "notes.txt"), "mine");
     EXPECT_EQ(fs::hard_link_count(d / "a.txt"), 1u);  // the backup link is gone
     ExpectNoLeftovers(d);
     EXPECT_THROW(set.Commit(), Error);
@@ -105,9 +91,9 @@ TEST(OutputSet, SameDestinationTwiceIsOneEntry) {
 
 TEST(OutputSet, DirectoryInTheWayIsRefusedBeforeAnythingMoves) {
     const fs::path d = Scratch();
-    Put(d / "a.txt", "old a");
+    WriteBytes(d / "a.txt", "old a");
     fs::create_directory(d / "b.txt");
-    Put(d / "b.txt" / "inside", "kept");
+    WriteBytes(d / "b.txt" / "inside", "kept");
     const auto before = Snapshot(d);
     {
         // Seen at Add: the set is abandoned, its temporaries removed.
@@ -128,17 +114,17 @@ TEST(OutputSet, DirectoryInTheWayIsRefusedBeforeAnythingMoves) {
         set.Write((d / "a.txt").string(), "new a");
         set.Write((d / "b.txt").string(), "new b");
         fs::create_directory(d / "b.txt");
-        Put(d / "b.txt" / "inside", "kept");
+        WriteBytes(d / "b.txt" / "inside", "kept");
         EXPECT_THROW(set.Commit(), Error);
-        EXPECT_EQ(Get(d / "a.txt"), "old a");
-        EXPECT_EQ(Get(d / "b.txt" / "inside"), "kept");
+        EXPECT_EQ(Slurp(d / "a.txt"), "old a");
+        EXPECT_EQ(Slurp(d / "b.txt" / "inside"), "kept");
     }
     ExpectNoLeftovers(d);
 }
 
 TEST(OutputSet, SymlinkAndOtherEntriesAreRefused) {
     const fs::path d = Scratch();
-    Put(d / "target.txt", "theirs");
+    WriteBytes(d / "target.txt", "theirs");
     fs::create_symlink(d / "target.txt", d / "link.txt");
     ASSERT_EQ(::mkfifo((d / "fifo").c_str(), 0600), 0);
     const auto before = Snapshot(d);
@@ -153,8 +139,8 @@ TEST(OutputSet, SymlinkAndOtherEntriesAreRefused) {
 TEST(OutputSet, FailedRenameRestoresEveryPreviousFile) {
     const fs::path d = Scratch();
     for (const char* n : {"a.png", "b.exr", "c.json"})
-        Put(d / n, std::string("old ") + n);
-    Put(d / "notes.txt", "mine");
+        WriteBytes(d / n, std::string("old ") + n);
+    WriteBytes(d / "notes.txt", "mine");
     ::chmod((d / "b.exr").c_str(), 0640);
     const auto before = Snapshot(d);
     for (size_t failAt = 0; failAt < 3; ++failAt) {
@@ -174,7 +160,7 @@ TEST(OutputSet, FailedRenameRestoresEveryPreviousFile) {
 
 TEST(OutputSet, RollbackRemovesTheFoldersItCreated) {
     const fs::path d = Scratch();
-    Put(d / "mine.txt", "mine");
+    WriteBytes(d / "mine.txt", "mine");
     const auto before = Snapshot(d);
     OutputSet set;
     set.Write((d / "new" / "a" / "b" / "x.txt").string(), "x");
@@ -204,10 +190,10 @@ TEST(OutputSet, MissingFoldersAreCreatedAtCommitAsTheUmaskSays) {
 
 TEST(OutputSet, ReplacedFileKeepsItsPermissionBits) {
     const fs::path d = Scratch();
-    Put(d / "f.txt", "old");
+    WriteBytes(d / "f.txt", "old");
     ::chmod((d / "f.txt").c_str(), 0640);
     WriteFileAtomically((d / "f.txt").string(), "new");
-    EXPECT_EQ(Get(d / "f.txt"), "new");
+    EXPECT_EQ(Slurp(d / "f.txt"), "new");
     EXPECT_EQ(ModeOf(d / "f.txt"), mode_t(0640));
 }
 
@@ -224,13 +210,13 @@ TEST(OutputSet, TooLongNamesAreRefusedBeforeAnythingIsCreated) {
     // A name just inside the limit works: the temporary's name is shortened to fit.
     const std::string name(250, 'y');
     WriteFileAtomically((d / (name + ".txt")).string(), "ok");
-    EXPECT_EQ(Get(d / (name + ".txt")), "ok");
+    EXPECT_EQ(Slurp(d / (name + ".txt")), "ok");
     ExpectNoLeftovers(d);
 }
 
 TEST(OutputSet, ParentThatIsAFileIsRefused) {
     const fs::path d = Scratch();
-    Put(d / "file", "x");
+    WriteBytes(d / "file", "x");
     const auto before = Snapshot(d);
     const std::string msg = ErrorOf([&] {
         WriteFileAtomically((d / "file" / "sub" / "f.txt").string(), "f", "--out");

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "tests/common/test_files.h"
 #include "texture/image_io.h"
 #include "texture/mip_pyramid.h"
 
@@ -20,15 +21,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path Scratch() {
-    fs::path p =
-        fs::path(::testing::TempDir()) /
-        ("rs_mip_io_" +
-         std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-    fs::remove_all(p);
-    fs::create_directories(p);
-    return p;
-}
+fs::path Scratch() { return reliefsim::testing::Scratch("rs_mip_io_"); }
 
 /// Depth-like values with awkward bit patterns (fixed seed).
 std::vector<float> Values(int w, int h) {

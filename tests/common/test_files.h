@@ -1,5 +1,6 @@
-// Test helpers for "the output location is exactly as it was": a snapshot of a folder tree
-// and a check that no temporary, backup or staging entry was left in it.
+// Test helpers for files: a scratch folder per test, whole-file reads and writes, and for
+// "the output location is exactly as it was", a snapshot of a folder tree and a check that
+// no temporary, backup or staging entry was left in it.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -13,6 +14,28 @@
 
 namespace reliefsim::testing {
 
+/// An empty folder named PREFIX + the running test's name, under the GoogleTest temp dir.
+inline std::filesystem::path Scratch(const std::string& prefix) {
+    namespace fs = std::filesystem;
+    fs::path p = fs::path(::testing::TempDir()) /
+                 (prefix + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::remove_all(p);
+    fs::create_directories(p);
+    return p;
+}
+
+/// The whole file as bytes ("" when it cannot be read).
+inline std::string Slurp(const std::filesystem::path& p) {
+    std::ifstream f(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(f), {});
+}
+
+/// Writes `bytes` as the whole file.
+inline void WriteBytes(const std::filesystem::path& p, const std::string& bytes) {
+    std::ofstream f(p, std::ios::binary);
+    f << bytes;
+}
+
 /// Everything under `dir` by relative path: type and mode, size, mtime, inode, contents
 /// (empty when `dir` does not exist).
 inline std::map<std::string, std::string> Snapshot(const std::filesystem::path& dir) {
@@ -25,10 +48,7 @@ inline std::map<std::string, std::string> Snapshot(const std::filesystem::path& 
         std::string v = std::to_string(st.st_mode) + " " + std::to_string(st.st_size) + " " +
                         std::to_string(st.st_mtim.tv_sec) + "." +
                         std::to_string(st.st_mtim.tv_nsec) + " " + std::to_string(st.st_ino);
-        if (S_ISREG(st.st_mode)) {
-            std::ifstream f(e.path(), std::ios::binary);
-            v += " " + std::string(std::istreambuf_iterator<char>(f), {});
-        }
+        if (S_ISREG(st.st_mode)) v += " " + Slurp(e.path());
         out[fs::relative(e.path(), dir).string()] = v;
     }
     return out;
