@@ -1,7 +1,5 @@
-// `reliefsim glcompare`: renders with the C++ frame loop and with the GLSL twins on llvmpipe
-// and compares the per-pixel records bit for bit.
-#include "app/glcompare.h"
-
+// `reliefsim glcompare`: renders with the C++ frame loop and with the GLSL twins on
+// llvmpipe and compares the per-pixel records bit for bit.
 #include <cinttypes>
 #include <cstdio>
 #include <cstring>
@@ -9,6 +7,7 @@
 #include <sstream>
 
 #include "app/commands.h"
+#include "app/glcompare.h"
 #include "app/trace.h"
 #include "core/error.h"
 #include "metrics/heatmap.h"
@@ -51,15 +50,17 @@ struct GlCompareArgs {
 void PrintTrace(const GlCompareArgs& a, const HeightField& field, int x, int y) {
     const RenderSettings& s = a.options.settings;
     if (x < 0 || y < 0 || x >= s.width || y >= s.height)
-        throw Error("--trace-pixel " + a.tracePixel + ": outside the " + std::to_string(s.width) +
-                    "x" + std::to_string(s.height) + " frame");
-    // C++ path: the shared per-pixel trace (same kernel, inputs and FTZ/DAZ as the frame).
+        throw Error("--trace-pixel " + a.tracePixel + ": outside the " +
+                    std::to_string(s.width) + "x" + std::to_string(s.height) + " frame");
+    // C++ path: the shared per-pixel trace (same kernel, inputs and FTZ/DAZ as the
+    // frame).
     const PixelTrace cpu = TracePixel(field, s, x, y);
     const MarchInput& in = cpu.input;
     const MarchResult& m = cpu.result;
     const FetchCounts& counts = cpu.counts;
     std::vector<glm::vec4> cpuLog;  // u, v, depth, t
-    for (const TraceFetch& f : cpu.fetches) cpuLog.emplace_back(f.uv.x, f.uv.y, f.depth, f.t);
+    for (const TraceFetch& f : cpu.fetches)
+        cpuLog.emplace_back(f.uv.x, f.uv.y, f.depth, f.t);
     GlReference gl(s.threads > 0 ? s.threads : -1);
     GlScene scene = MakeGlScene(s);
     scene.measureLanes = false;
@@ -69,8 +70,8 @@ void PrintTrace(const GlCompareArgs& a, const HeightField& field, int x, int y) 
     const size_t i = g.record.Index(x, y);
     std::cout << "trace of pixel " << x << "," << y << " (row 0 at the top), " << s.method
               << "; " << gl.Renderer() << "\n"
-              << "ray: uvEntry " << Hex(in.uvEntry.x) << ", " << Hex(in.uvEntry.y) << "; dirUv "
-              << Hex(in.dirUv.x) << ", " << Hex(in.dirUv.y) << "\n";
+              << "ray: uvEntry " << Hex(in.uvEntry.x) << ", " << Hex(in.uvEntry.y)
+              << "; dirUv " << Hex(in.dirUv.x) << ", " << Hex(in.dirUv.y) << "\n";
     const size_t n = std::max(cpuLog.size(), g.trace.size());
     bool diverged = false;
     for (size_t k = 0; k < n; ++k) {
@@ -80,40 +81,44 @@ void PrintTrace(const GlCompareArgs& a, const HeightField& field, int x, int y) 
                       << "  depth " << Hex(cpuLog[k].z) << "\n";
         if (k < g.trace.size())
             std::cout << "  GL   uv " << Hex(g.trace[k].x) << ", " << Hex(g.trace[k].y)
-                      << "  depth " << Hex(g.trace[k].z) << "  t " << Hex(g.trace[k].w) << "\n";
+                      << "  depth " << Hex(g.trace[k].z) << "  t " << Hex(g.trace[k].w)
+                      << "\n";
         if (!diverged && k < cpuLog.size() && k < g.trace.size() &&
-            (UlpDistance(cpuLog[k].x, g.trace[k].x) || UlpDistance(cpuLog[k].y, g.trace[k].y) ||
+            (UlpDistance(cpuLog[k].x, g.trace[k].x) ||
+             UlpDistance(cpuLog[k].y, g.trace[k].y) ||
              UlpDistance(cpuLog[k].z, g.trace[k].z))) {
             std::cout << "  ^ first divergence\n";
             diverged = true;
         }
     }
-    std::cout << "result C++: uv " << Hex(m.uvHit.x) << ", " << Hex(m.uvHit.y) << " depth "
-              << Hex(m.depthHit) << " coarse " << m.nCoarse << " refine " << m.nRefine
-              << " fetches " << counts.nFetches << "\n";
+    std::cout << "result C++: uv " << Hex(m.uvHit.x) << ", " << Hex(m.uvHit.y)
+              << " depth " << Hex(m.depthHit) << " coarse " << m.nCoarse << " refine "
+              << m.nRefine << " fetches " << counts.nFetches << "\n";
     if (g.record.Covered(i))
-        std::cout << "result GL:  uv " << Hex(g.record.hitU[i]) << ", " << Hex(g.record.hitV[i])
-                  << " depth " << Hex(g.record.hitDepth[i]) << " coarse " << g.record.nCoarse[i]
-                  << " refine " << g.record.nRefine[i] << " fetches " << g.record.nFetches[i]
-                  << "\n";
+        std::cout << "result GL:  uv " << Hex(g.record.hitU[i]) << ", "
+                  << Hex(g.record.hitV[i]) << " depth " << Hex(g.record.hitDepth[i])
+                  << " coarse " << g.record.nCoarse[i] << " refine "
+                  << g.record.nRefine[i] << " fetches " << g.record.nFetches[i] << "\n";
     else
         std::cout << "result GL:  pixel not covered\n";
 }
 
-void PrintText(const GlCompareResult& r, const GlCompareArgs& a, const HeightField& field) {
+void PrintText(const GlCompareResult& r, const GlCompareArgs& a,
+               const HeightField& field) {
     const RenderSettings& s = a.options.settings;
     const RecordComparison& c = r.comparison;
-    std::printf("reliefsim glcompare: %s on %s at %dx%d, %s %s %s; %s\n", s.method.c_str(),
-                field.name.c_str(), s.width, s.height, a.options.textureFormat.c_str(),
+    std::printf("reliefsim glcompare: %s on %s at %dx%d, %s %s %s; %s\n",
+                s.method.c_str(), field.name.c_str(), s.width, s.height,
+                a.options.textureFormat.c_str(),
                 std::string(ToString(s.sampler.filter)).c_str(),
                 std::string(ToString(s.sampler.wrap)).c_str(), r.renderer.c_str());
     std::printf("pixels %" PRIu64 " covered by both; coverage differs at %" PRIu64
-                " (C++ only %" PRIu64 ", llvmpipe only %" PRIu64 "); flags differ at %" PRIu64
-                "\n",
+                " (C++ only %" PRIu64 ", llvmpipe only %" PRIu64
+                "); flags differ at %" PRIu64 "\n",
                 c.pixels, c.cpuOnly + c.glOnly, c.cpuOnly, c.glOnly, c.flagsDiffer);
     auto row = [&](const char* name, const FieldAgreement& f, const char* unit) {
-        std::printf("  %-11s %8.3f%% identical (%" PRIu64 " / %" PRIu64 "), max diff %" PRIu64
-                    " %s\n",
+        std::printf("  %-11s %8.3f%% identical (%" PRIu64 " / %" PRIu64
+                    "), max diff %" PRIu64 " %s\n",
                     name, 100.0 * f.fraction, f.identical, c.pixels, f.maxDiff, unit);
     };
     row("hit_uv", c.hitUv, "ulp");
@@ -122,18 +127,20 @@ void PrintText(const GlCompareResult& r, const GlCompareArgs& a, const HeightFie
     row("fetches", c.fetches, "");
     if (r.gl.lanes.available) {
         const LaneCostCheck& l = r.laneCost;
-        std::printf("lane cost (4x2 groups x 8 lanes): model %" PRIu64 " %s measured %" PRIu64
-                    " lane-fetches; groups model %" PRIu64 " / run %" PRIu64 ", %" PRIu64
-                    " mismatched; subgroup size %u, shape violations %" PRIu64
-                    "; summary lane_fetches_4x2 (blocks not split by triangle) %" PRIu64 "\n",
-                    l.modelLaneFetches, l.Equal() ? "==" : "!=", l.measuredLaneFetches,
-                    l.modelGroups, l.measuredGroups, l.groupsMismatched,
-                    r.gl.lanes.subgroupSize, r.gl.lanes.shapeViolations, l.summaryLaneFetches);
+        std::printf(
+            "lane cost (4x2 groups x 8 lanes): model %" PRIu64 " %s measured %" PRIu64
+            " lane-fetches; groups model %" PRIu64 " / run %" PRIu64 ", %" PRIu64
+            " mismatched; subgroup size %u, shape violations %" PRIu64
+            "; summary lane_fetches_4x2 (blocks not split by triangle) %" PRIu64 "\n",
+            l.modelLaneFetches, l.Equal() ? "==" : "!=", l.measuredLaneFetches,
+            l.modelGroups, l.measuredGroups, l.groupsMismatched, r.gl.lanes.subgroupSize,
+            r.gl.lanes.shapeViolations, l.summaryLaneFetches);
         for (const LaneCostCheck::Mismatch& mm : l.firstMismatches)
-            std::printf("  group at pixels %d..%d, rows %d..%d, triangle %d: model %u trips, "
-                        "measured %u\n",
-                        4 * mm.blockX, 4 * mm.blockX + 3, 2 * mm.blockY, 2 * mm.blockY + 1,
-                        mm.triangle, mm.modelTrips, mm.measuredTrips);
+            std::printf(
+                "  group at pixels %d..%d, rows %d..%d, triangle %d: model %u trips, "
+                "measured %u\n",
+                4 * mm.blockX, 4 * mm.blockX + 3, 2 * mm.blockY, 2 * mm.blockY + 1,
+                mm.triangle, mm.modelTrips, mm.measuredTrips);
     } else {
         std::printf("lane cost: not measured (GL_ARB_shader_ballot unavailable)\n");
     }
@@ -142,7 +149,8 @@ void PrintText(const GlCompareResult& r, const GlCompareArgs& a, const HeightFie
     } else {
         std::printf("first differing pixels (trace with the command shown):\n");
         for (const glm::ivec2& p : c.firstDiffs)
-            std::printf("  %d,%d: %s\n", p.x, p.y, TraceCommand(a.options, p.x, p.y).c_str());
+            std::printf("  %d,%d: %s\n", p.x, p.y,
+                        TraceCommand(a.options, p.x, p.y).c_str());
     }
 }
 
@@ -154,13 +162,16 @@ void RunGlCompareCommand(GlCompareArgs& a) {
     std::pair<int, int> pixel{-1, -1};
     if (!a.tracePixel.empty()) {
         pixel = ParsePixel("--trace-pixel", a.tracePixel, s.width, s.height);
-        if (a.json) throw Error("--json: not used with --trace-pixel (the trace is text)");
+        if (a.json)
+            throw Error("--json: not used with --trace-pixel (the trace is text)");
         if (a.heatmapOption && a.heatmapOption->count() > 0)
-            throw Error("--heatmap: not used with --trace-pixel (a trace writes no heatmap)");
+            throw Error(
+                "--heatmap: not used with --trace-pixel (a trace writes no heatmap)");
     } else if (!a.heatmap.empty()) {
         CheckOutputFile("--heatmap", a.heatmap, /*folderIsCreated=*/false);
     }
-    if (a.tracePixel.empty()) RequireFrameMemory(s.width, s.height, kGlCompareBytesPerPixel);
+    if (a.tracePixel.empty())
+        RequireFrameMemory(s.width, s.height, kGlCompareBytesPerPixel);
     HeightField field = LoadRenderMap(a.options);
     if (!a.tracePixel.empty()) {
         const auto [x, y] = pixel;
@@ -171,9 +182,10 @@ void RunGlCompareCommand(GlCompareArgs& a) {
     GlCompareResult r = RunGlCompare(field, s, gl);
     const RecordComparison& c = r.comparison;
     if (!a.heatmap.empty())
-        WriteHeatmapPng(a.heatmap, c.diffMap.data(), c.mask.data(), s.width, s.height,
-                        {0.0f, 5.0f, "inferno",
-                         "differing fields (0-4; 5 = coverage), " + s.method + " C++ vs llvmpipe"});
+        WriteHeatmapPng(
+            a.heatmap, c.diffMap.data(), c.mask.data(), s.width, s.height,
+            {0.0f, 5.0f, "inferno",
+             "differing fields (0-4; 5 = coverage), " + s.method + " C++ vs llvmpipe"});
     if (a.json) {
         std::cout << GlCompareJson(r, a.options, field).dump(2) << "\n";
     } else {
@@ -186,8 +198,9 @@ void RunGlCompareCommand(GlCompareArgs& a) {
 
 GlScene MakeGlScene(const RenderSettings& s) {
     if (s.sampler.precision == Precision::Gpu8)
-        throw Error("sampler precision gpu8: has no GL twin (llvmpipe filters R8 in 8.8 fixed "
-                    "point: use r8 / llvmpipe8)");
+        throw Error(
+            "sampler precision gpu8: has no GL twin (llvmpipe filters R8 in 8.8 fixed "
+            "point: use r8 / llvmpipe8)");
     GlScene g;
     g.width = s.width;
     g.height = s.height;
@@ -196,7 +209,7 @@ GlScene MakeGlScene(const RenderSettings& s) {
     g.mesh = MakePlane(s.tiling);  // same positions and indices as the pipeline's plane
     g.sampler = s.sampler;
     g.format = s.sampler.precision == Precision::Llvmpipe8 ? TextureFormat::R8
-                                                            : TextureFormat::R32F;
+                                                           : TextureFormat::R32F;
     const MethodInfo& method = FindMethod(s.method);
     g.kernel = MakeKernel(method, ResolveParams(method, s.set));
     return g;
@@ -212,14 +225,16 @@ GlCompareResult RunGlCompare(const HeightField& field, const RenderSettings& s,
                              GlReference& gl) {
     GlCompareResult r;
     r.cpu = Render(field, s);
-    // Run 1, the record: the same plane as the C++ frame loop, drawn as llvmpipe draws it.
+    // Run 1, the record: the same plane as the C++ frame loop, drawn as llvmpipe draws
+    // it.
     GlScene scene = MakeGlScene(s);
     scene.measureLanes = false;
     r.gl = gl.Render(field, scene);
     r.renderer = gl.Renderer();
     r.comparison = CompareRecords(r.cpu.record, r.gl.record);
-    // Run 2, the lanes: the plane pre-clipped into the pieces llvmpipe would rasterize, with
-    // the in-shader trip counters; the model takes each pixel's fetches from the C++ kernel.
+    // Run 2, the lanes: the plane pre-clipped into the pieces llvmpipe would rasterize,
+    // with the in-shader trip counters; the model takes each pixel's fetches from the C++
+    // kernel.
     GlScene laneScene = scene;
     laneScene.mesh = ClipMeshToViewport(scene.mesh, scene.clipFromWorld);
     laneScene.measureLanes = true;
@@ -268,12 +283,12 @@ std::string TraceCommand(const RenderOptions& o, int x, int y) {
     if (o.map.stores != "height") cmd << " --map-stores " << o.map.stores;
     cmd << " --method " << s.method;
     for (const auto& kv : s.set) cmd << " --set " << kv;
-    cmd << " --size " << s.width << "x" << s.height << " --view-angle " << Number(s.viewAngle)
-        << " --azimuth " << Number(s.azimuth) << " --distance " << Number(s.distance)
-        << " --fov " << Number(s.fovY) << " --depth-scale " << Number(s.depthScale)
-        << " --tiling " << Number(s.tiling) << " --filter " << ToString(s.sampler.filter)
-        << " --wrap " << ToString(s.sampler.wrap) << " --texture-format " << o.textureFormat
-        << " --trace-pixel " << x << "," << y;
+    cmd << " --size " << s.width << "x" << s.height << " --view-angle "
+        << Number(s.viewAngle) << " --azimuth " << Number(s.azimuth) << " --distance "
+        << Number(s.distance) << " --fov " << Number(s.fovY) << " --depth-scale "
+        << Number(s.depthScale) << " --tiling " << Number(s.tiling) << " --filter "
+        << ToString(s.sampler.filter) << " --wrap " << ToString(s.sampler.wrap)
+        << " --texture-format " << o.textureFormat << " --trace-pixel " << x << "," << y;
     return cmd.str();
 }
 
@@ -330,11 +345,14 @@ void RegisterGlCompareCommand(CLI::App& root) {
         "first differing pixels, the lane-cost check, and write a difference heatmap");
     AddRenderOptions(cmd, a->options, /*withHeatmapScales=*/false);
     cmd->add_flag("--json", a->json, "print the report as JSON");
-    a->heatmapOption = cmd->add_option("--heatmap", a->heatmap,
-                    "difference heatmap PNG (differing fields per pixel); empty: none")
-        ->capture_default_str();
-    cmd->add_option("--trace-pixel", a->tracePixel,
-                    "X,Y (row 0 at the top): print both paths' fetches for one pixel instead");
+    a->heatmapOption =
+        cmd->add_option(
+               "--heatmap", a->heatmap,
+               "difference heatmap PNG (differing fields per pixel); empty: none")
+            ->capture_default_str();
+    cmd->add_option(
+        "--trace-pixel", a->tracePixel,
+        "X,Y (row 0 at the top): print both paths' fetches for one pixel instead");
     cmd->callback([a] { RunGlCompareCommand(*a); });
 }
 

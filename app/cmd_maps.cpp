@@ -1,9 +1,11 @@
-// `reliefsim maps`: generate (or load) a derived map, print and write its statistics (#3).
+// `reliefsim maps`: generate (or load) a derived map, print and write its statistics
+// (#3).
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
-#include <unistd.h>
 
 #include "app/commands.h"
 #include "app/render_options.h"
@@ -50,27 +52,31 @@ void CheckCombinations(const MapsOptions& o, ConeKind kind) {
     const bool sectorKind = kind == ConeKind::Cone || kind == ConeKind::Quad ||
                             kind == ConeKind::Acm4 || kind == ConeKind::Acm8;
     if (mip) {
-        for (const char* opt : {"--encoding", "--adaptive", "--threshold", "--levels",
-                                "--search-steps", "--stacked-count", "--relaxed", "--safety",
-                                "--external", "--external-channel", "--cache-dir", "--animate",
-                                "--bins"})
+        for (const char* opt :
+             {"--encoding", "--adaptive", "--threshold", "--levels", "--search-steps",
+              "--stacked-count", "--relaxed", "--safety", "--external",
+              "--external-channel", "--cache-dir", "--animate", "--bins"})
             if (o.Given(opt))
                 refuse(opt, "does not apply to " + k +
                                 " (a pyramid of depths, written as one MIP-mapped file)");
     }
     if (o.Given("--animate")) {
         if (!sectorKind)
-            refuse("--animate", "needs --kind cone, quad, acm4 or acm8 (adaptive "
-                                "preprocessing, 000 Algorithm 1), not " + k);
-        for (const char* opt : {"--out", "--cache-dir", "--external", "--external-channel",
-                                "--safety", "--encoding", "--search-steps", "--stacked-count",
-                                "--relaxed", "--bins"})
+            refuse("--animate",
+                   "needs --kind cone, quad, acm4 or acm8 (adaptive "
+                   "preprocessing, 000 Algorithm 1), not " +
+                       k);
+        for (const char* opt :
+             {"--out", "--cache-dir", "--external", "--external-channel", "--safety",
+              "--encoding", "--search-steps", "--stacked-count", "--relaxed", "--bins"})
             if (o.Given(opt))
-                refuse(opt, "does not apply with --animate (frames are regenerated and timed, "
-                            "not written)");
+                refuse(opt,
+                       "does not apply with --animate (frames are regenerated and timed, "
+                       "not written)");
     }
     if (o.adaptive && !sectorKind)
-        refuse("--adaptive", "applies to --kind cone, quad, acm4 and acm8 only, not " + k);
+        refuse("--adaptive",
+               "applies to --kind cone, quad, acm4 and acm8 only, not " + k);
     for (const char* opt : {"--threshold", "--levels"})
         if (o.Given(opt) && !o.adaptive && !o.Given("--animate"))
             refuse(opt, "applies only with --adaptive (or --animate)");
@@ -78,8 +84,10 @@ void CheckCombinations(const MapsOptions& o, ConeKind kind) {
         kind == ConeKind::Relaxed ||
         ((kind == ConeKind::ConeNormal || kind == ConeKind::Stacked) && o.relaxed);
     if (o.Given("--search-steps") && !relaxedSearch)
-        refuse("--search-steps", "applies to --kind relaxed (and cone-normal or stacked with "
-                                 "--relaxed) only, not " + k);
+        refuse("--search-steps",
+               "applies to --kind relaxed (and cone-normal or stacked with "
+               "--relaxed) only, not " +
+                   k);
     if (o.Given("--stacked-count") && kind != ConeKind::Stacked)
         refuse("--stacked-count", "applies to --kind stacked only, not " + k);
     if (o.Given("--external-channel") && o.external.empty())
@@ -88,10 +96,12 @@ void CheckCombinations(const MapsOptions& o, ConeKind kind) {
         for (const char* opt : {"--cache-dir", "--adaptive", "--threshold", "--levels",
                                 "--search-steps", "--stacked-count", "--relaxed"})
             if (o.Given(opt))
-                refuse(opt, "does not apply with --external (the map is read, not generated)");
+                refuse(opt,
+                       "does not apply with --external (the map is read, not generated)");
         const bool all = o.externalChannel == "all";
         const bool oneChannel = kind == ConeKind::Cone || kind == ConeKind::Relaxed ||
-                                kind == ConeKind::RelaxedExact || kind == ConeKind::ConeNormal;
+                                kind == ConeKind::RelaxedExact ||
+                                kind == ConeKind::ConeNormal;
         const bool fourChannels = kind == ConeKind::Quad || kind == ConeKind::Acm4;
         if (!oneChannel && !fourChannels)
             refuse("--external", k + " cannot be read from an image (only cone, relaxed, "
@@ -107,8 +117,8 @@ void CheckCombinations(const MapsOptions& o, ConeKind kind) {
 void Status(const char* msg) {
     if (::isatty(2)) std::fprintf(stderr, "\r[maps] %-60s", msg);
 }
-/// The progress bar on stderr, "[maps] generating  42% [########    ]" (installed only when
-/// stderr is a terminal).
+/// The progress bar on stderr, "[maps] generating  42% [########    ]" (installed only
+/// when stderr is a terminal).
 void ProgressBar(double fraction) {
     const int width = 30, filled = int(fraction * width + 0.5);
     std::fprintf(stderr, "\r[maps] generating %3d%% [%s%s]", int(fraction * 100 + 0.5),
@@ -126,10 +136,11 @@ std::string StatsPath(const std::string& out) {
 }
 
 void PrintStats(const ConeMap& m, const ConeMapStats& s) {
-    std::printf("%s %dx%d x%d: min %.6g  mean %.6g  max %.6g  (%lld values, %lld unbounded)\n",
-                std::string(ToString(m.kind)).c_str(), m.width, m.height, m.channels, s.minRatio,
-                s.meanRatio, s.maxRatio, static_cast<long long>(s.nValues),
-                static_cast<long long>(s.nUnbounded));
+    std::printf(
+        "%s %dx%d x%d: min %.6g  mean %.6g  max %.6g  (%lld values, %lld unbounded)\n",
+        std::string(ToString(m.kind)).c_str(), m.width, m.height, m.channels, s.minRatio,
+        s.meanRatio, s.maxRatio, static_cast<long long>(s.nValues),
+        static_cast<long long>(s.nUnbounded));
     const double nb = double(s.histogram.size());
     int64_t peak = 1;
     for (int64_t c : s.histogram) peak = std::max(peak, c);
@@ -137,14 +148,17 @@ void PrintStats(const ConeMap& m, const ConeMapStats& s) {
         const int bar = int(40.0 * double(s.histogram[b]) / double(peak));
         std::printf("  [%.3f,%.3f%c %9lld %s\n", double(b) / nb, double(b + 1) / nb,
                     b + 1 == s.histogram.size() ? ']' : ')',
-                    static_cast<long long>(s.histogram[b]), std::string(size_t(bar), '#').c_str());
+                    static_cast<long long>(s.histogram[b]),
+                    std::string(size_t(bar), '#').c_str());
     }
 }
 
 void Run(const MapsOptions& o) {
     // Validate everything before any work or output.
     const auto kind = ParseConeKind(o.kind);
-    if (!kind) throw Error("--kind \"" + o.kind + "\": unknown; must be one of " + ConeKindList());
+    if (!kind)
+        throw Error("--kind \"" + o.kind + "\": unknown; must be one of " +
+                    ConeKindList());
     const auto enc = ParseConeEncoding(o.encoding);
     if (!enc)
         throw Error("--encoding \"" + o.encoding + "\": unknown; must be one of " +
@@ -159,19 +173,28 @@ void Run(const MapsOptions& o) {
     } else if (!o.out.empty()) {
         const std::string ext = std::filesystem::path(o.out).extension().string();
         if (ext != ".exr" && ext != ".png")
-            throw Error("--out \"" + o.out + "\": unsupported extension; expected .exr or .png");
+            throw Error("--out \"" + o.out +
+                        "\": unsupported extension; expected .exr or .png");
     }
     if (o.animate < 0 || o.animate > 100000)
-        throw Error("--animate " + std::to_string(o.animate) + ": expected 0..100000 frames");
+        throw Error("--animate " + std::to_string(o.animate) +
+                    ": expected 0..100000 frames");
     if (o.bins < 1 || o.bins > 4096) throw Error("--bins: expected 1..4096");
     CheckCombinations(o, *kind);
     int extChannel = 2;
-    if (o.externalChannel == "R") extChannel = 0;
-    else if (o.externalChannel == "G") extChannel = 1;
-    else if (o.externalChannel == "B") extChannel = 2;
-    else if (o.externalChannel == "A") extChannel = 3;
-    else if (o.externalChannel == "all") extChannel = -1;
-    else throw Error("--external-channel \"" + o.externalChannel + "\": must be R, G, B, A or all");
+    if (o.externalChannel == "R")
+        extChannel = 0;
+    else if (o.externalChannel == "G")
+        extChannel = 1;
+    else if (o.externalChannel == "B")
+        extChannel = 2;
+    else if (o.externalChannel == "A")
+        extChannel = 3;
+    else if (o.externalChannel == "all")
+        extChannel = -1;
+    else
+        throw Error("--external-channel \"" + o.externalChannel +
+                    "\": must be R, G, B, A or all");
     ConeMapParams p;
     p.searchSteps = o.searchSteps;
     p.stackedCount = o.stackedCount;
@@ -182,17 +205,21 @@ void Run(const MapsOptions& o) {
     if (::isatty(2)) p.progress = ProgressBar;
     ValidateConeMapParams(p);
     if (o.relaxed && *kind != ConeKind::ConeNormal && *kind != ConeKind::Stacked)
-        throw Error("--relaxed: applies to --kind cone-normal and stacked only (for plain relaxed "
-                    "cones use --kind relaxed)");
+        throw Error(
+            "--relaxed: applies to --kind cone-normal and stacked only (for plain "
+            "relaxed "
+            "cones use --kind relaxed)");
     if (!o.cacheDir.empty()) {
         std::error_code ec;
         const auto st = std::filesystem::status(o.cacheDir, ec);
         if (std::filesystem::exists(st) && !std::filesystem::is_directory(st))
-            throw Error("--cache-dir \"" + o.cacheDir + "\": exists and is not a directory");
+            throw Error("--cache-dir \"" + o.cacheDir +
+                        "\": exists and is not a directory");
     }
     if (!o.out.empty()) {
         CheckOutputFile("--out", o.out);
-        CheckOutputDestination(StatsPath(o.out), "--out \"" + o.out + "\" (its statistics)");
+        CheckOutputDestination(StatsPath(o.out),
+                               "--out \"" + o.out + "\" (its statistics)");
     }
     if (!o.out.empty() && std::filesystem::path(o.out).extension() == ".png" &&
         *kind != ConeKind::Acm8 && ChannelCount(*kind, p) > 4)
@@ -208,8 +235,8 @@ void Run(const MapsOptions& o) {
         const HeightField first = LoadMapFromOptions(o.map);
         const int W = first.width, H = first.height;
         // Buffers live across frames, as a renderer would keep them: after frame 0 (which
-        // allocates, page-faults the buffers in and starts the TBB workers) a frame allocates
-        // nothing, so the steady-state times are the preprocessing cost itself.
+        // allocates, page-faults the buffers in and starts the TBB workers) a frame
+        // allocates nothing, so the steady-state times are the preprocessing cost itself.
         AdaptiveWorkspace ws;
         HeightField hf;
         ConeMap m;
@@ -218,9 +245,11 @@ void Run(const MapsOptions& o) {
             const auto t0 = std::chrono::steady_clock::now();
             FillSinusoidMap(hf, W, H, float(f) / 30.0f);
             GenerateAdaptiveSectorMap(hf, k, o.threshold, o.levels, ws, m);
-            const double ms =
-                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-            if (f == 0) first0 = ms;
+            const double ms = std::chrono::duration<double, std::milli>(
+                                  std::chrono::steady_clock::now() - t0)
+                                  .count();
+            if (f == 0)
+                first0 = ms;
             else {
                 sum += ms;
                 worst = std::max(worst, ms);
@@ -230,9 +259,10 @@ void Run(const MapsOptions& o) {
                         f == 0 ? ", warm-up" : "");
         }
         if (o.animate > 1)
-            std::printf("animate: %d frames, mean %.3f ms, max %.3f ms per frame after the first "
-                        "(first %.3f ms, warm-up)\n",
-                        o.animate, sum / (o.animate - 1), worst, first0);
+            std::printf(
+                "animate: %d frames, mean %.3f ms, max %.3f ms per frame after the first "
+                "(first %.3f ms, warm-up)\n",
+                o.animate, sum / (o.animate - 1), worst, first0);
         else
             std::printf("animate: 1 frame, %.3f ms (warm-up included)\n", first0);
         return;
@@ -248,13 +278,14 @@ void Run(const MapsOptions& o) {
                   "use a smaller map");
     if (*kind == ConeKind::MinMip || *kind == ConeKind::MaxMip) {
         // maxmip: max height = min depth; minmip: min height = max depth.
-        const auto levels = BuildMipPyramid(hf.depth, hf.width, hf.height, 1,
-                                            *kind == ConeKind::MaxMip ? MipReduce::Min : MipReduce::Max);
+        const auto levels =
+            BuildMipPyramid(hf.depth, hf.width, hf.height, 1,
+                            *kind == ConeKind::MaxMip ? MipReduce::Min : MipReduce::Max);
         for (size_t l = 0; l < levels.size(); ++l)
             std::printf("level %zu: %dx%d\n", l, levels[l].width, levels[l].height);
         if (!o.out.empty()) {
-            // One MIP-mapped file with every level, created (with any missing folder) only
-            // once it is complete.
+            // One MIP-mapped file with every level, created (with any missing folder)
+            // only once it is complete.
             try {
                 CheckMipPyramidPath(o.out);
             } catch (const Error& e) {
@@ -274,8 +305,9 @@ void Run(const MapsOptions& o) {
         m = LoadExternalConeMap(o.external, *kind, extChannel, hf.width, hf.height);
     } else if (!o.cacheDir.empty()) {
         bool hit = false;
-        m = MapCache(o.cacheDir).GetOrCreate(hf, *kind, p, [&] { return GenerateConeMap(hf, *kind, p); },
-                                             &hit);
+        m = MapCache(o.cacheDir)
+                .GetOrCreate(
+                    hf, *kind, p, [&] { return GenerateConeMap(hf, *kind, p); }, &hit);
         std::printf("cache: %s\n", hit ? "hit" : "miss (generated and stored)");
     } else {
         m = GenerateConeMap(hf, *kind, p);
@@ -303,38 +335,49 @@ void Run(const MapsOptions& o) {
 void RegisterMapsCommand(CLI::App& root) {
     auto o = std::make_shared<MapsOptions>();
     auto* cmd = root.add_subcommand(
-        "maps", "generate a derived map (cone family, mip pyramids), print and write statistics");
+        "maps",
+        "generate a derived map (cone family, mip pyramids), print and write statistics");
     AddMapOptions(cmd, o->map);
-    cmd->add_option("--kind", o->kind,
-                    "cone|relaxed|relaxed-exact|quad|acm4|acm8|cone-normal|stacked|minmip|maxmip")
+    cmd->add_option(
+           "--kind", o->kind,
+           "cone|relaxed|relaxed-exact|quad|acm4|acm8|cone-normal|stacked|minmip|maxmip")
         ->capture_default_str();
     cmd->add_option("--encoding", o->encoding,
                     "float|u8|u8sqrt|u16 (quantisation rounds toward smaller ratios)")
         ->capture_default_str();
-    cmd->add_flag("--adaptive", o->adaptive,
-                  "adaptive hierarchical preprocessing (000 Algorithm 1; cone, quad, acm4, acm8)");
+    cmd->add_flag(
+        "--adaptive", o->adaptive,
+        "adaptive hierarchical preprocessing (000 Algorithm 1; cone, quad, acm4, acm8)");
     cmd->add_option("--threshold", o->threshold,
                     "adaptive: copy the parent's ratio when depths differ by <= this")
         ->capture_default_str();
     cmd->add_option("--levels", o->levels, "adaptive: hierarchy levels above the finest")
         ->capture_default_str();
-    cmd->add_option("--search-steps", o->searchSteps, "relaxed: Listing 18-2 search steps")
+    cmd->add_option("--search-steps", o->searchSteps,
+                    "relaxed: Listing 18-2 search steps")
         ->capture_default_str();
     cmd->add_option("--stacked-count", o->stackedCount, "stacked: number of cones")
         ->capture_default_str();
-    cmd->add_flag("--relaxed", o->relaxed,
-                  "cone-normal, stacked: relaxed cones (Listing 18-2) instead of conservative");
+    cmd->add_flag(
+        "--relaxed", o->relaxed,
+        "cone-normal, stacked: relaxed cones (Listing 18-2) instead of conservative");
     cmd->add_flag("--safety", o->safety, "3x3-minimum bilinear safety pass (Ban et al.)");
-    cmd->add_option("--out", o->out, "output: .exr (float, one channel per ratio) or .png (8-bit)");
-    cmd->add_option("--cache-dir", o->cacheDir, "disk cache of generated maps (content-hash keys)");
+    cmd->add_option("--out", o->out,
+                    "output: .exr (float, one channel per ratio) or .png (8-bit)");
+    cmd->add_option("--cache-dir", o->cacheDir,
+                    "disk cache of generated maps (content-hash keys)");
     cmd->add_option("--external", o->external,
-                    "use a cone map made elsewhere (e.g. GPU Gems 3 *_cone.tga) instead of generating");
-    cmd->add_option("--external-channel", o->externalChannel, "R|G|B|A|all (GPU Gems 3: B)")
+                    "use a cone map made elsewhere (e.g. GPU Gems 3 *_cone.tga) instead "
+                    "of generating");
+    cmd->add_option("--external-channel", o->externalChannel,
+                    "R|G|B|A|all (GPU Gems 3: B)")
         ->capture_default_str();
-    cmd->add_option("--animate", o->animate,
-                    "N frames of the dynamic sinusoid map at the --map size, regenerated and "
-                    "preprocessed with adaptive ACM each frame; prints per-frame times");
-    cmd->add_option("--bins", o->bins, "histogram bins over [0,1]")->capture_default_str();
+    cmd->add_option(
+        "--animate", o->animate,
+        "N frames of the dynamic sinusoid map at the --map size, regenerated and "
+        "preprocessed with adaptive ACM each frame; prints per-frame times");
+    cmd->add_option("--bins", o->bins, "histogram bins over [0,1]")
+        ->capture_default_str();
     o->command = cmd;
     cmd->callback([o] { Run(*o); });
 }

@@ -18,7 +18,8 @@ std::string Number(double v) {
 }  // namespace
 
 void RegisterMethodsCommand(CLI::App& root) {
-    auto* cmd = root.add_subcommand("methods", "list the methods, their parameters, defaults and ranges");
+    auto* cmd = root.add_subcommand(
+        "methods", "list the methods, their parameters, defaults and ranges");
     auto names = std::make_shared<bool>(false);
     cmd->add_flag("--names", *names, "print only the method names, one per line");
     cmd->callback([names] {
@@ -27,16 +28,18 @@ void RegisterMethodsCommand(CLI::App& root) {
                 std::cout << m.name << "\n";
                 continue;
             }
-            std::cout << m.name << "  " << m.title << "\n    source: " << m.source << "\n";
+            std::cout << m.name << "  " << m.title << "\n    source: " << m.source
+                      << "\n";
             if (!m.maps.empty()) {
                 std::cout << "    maps:";
                 for (const auto& map : m.maps) std::cout << " " << map;
                 std::cout << "\n";
             }
             for (const ParamDef& p : m.params)
-                std::cout << "    --set " << p.name << "=" << Number(p.defaultValue) << "  ["
-                          << Number(p.minValue) << ", " << Number(p.maxValue) << "]"
-                          << (p.integer ? " integer" : "") << "  " << p.help << "\n";
+                std::cout << "    --set " << p.name << "=" << Number(p.defaultValue)
+                          << "  [" << Number(p.minValue) << ", " << Number(p.maxValue)
+                          << "]" << (p.integer ? " integer" : "") << "  " << p.help
+                          << "\n";
             std::cout << "\n";
         }
     });

@@ -27,11 +27,12 @@ void RunRender(RenderArgs& a) {
     WriteRenderOutputs(a.out, out, s, field);
     if (!a.quiet) {
         const FrameSummary& m = out.summary;
-        std::cout << "reliefsim render: " << s.method << " on " << field.name << " at " << s.width
-                  << "x" << s.height << ": " << m.coveredPixels << " covered pixels, "
-                  << m.avgIterations << " iterations/px, " << m.avgFetches
-                  << " fetches/px (max " << m.maxFetches << "), mse_paper " << m.msePaper
-                  << ", " << out.frameSeconds * 1e3 << " ms\n"
+        std::cout << "reliefsim render: " << s.method << " on " << field.name << " at "
+                  << s.width << "x" << s.height << ": " << m.coveredPixels
+                  << " covered pixels, " << m.avgIterations << " iterations/px, "
+                  << m.avgFetches << " fetches/px (max " << m.maxFetches
+                  << "), mse_paper " << m.msePaper << ", " << out.frameSeconds * 1e3
+                  << " ms\n"
                   << "wrote " << a.out
                   << "/{color.png,iterations.png,fetches.png,record.exr,metrics.json}\n";
     }
@@ -42,10 +43,14 @@ void RunRender(RenderArgs& a) {
 void RegisterRenderCommand(CLI::App& root) {
     auto a = std::make_shared<RenderArgs>();
     auto* cmd = root.add_subcommand(
-        "render", "render the textured plane with one method; write color.png, iterations.png, "
-                  "fetches.png, record.exr and metrics.json into --out");
+        "render",
+        "render the textured plane with one method; write color.png, iterations.png, "
+        "fetches.png, record.exr and metrics.json into --out");
     AddRenderOptions(cmd, a->options);
-    cmd->add_option("--out", a->out, "output directory (created with its parents; the five files replaced)")->required();
+    cmd->add_option(
+           "--out", a->out,
+           "output directory (created with its parents; the five files replaced)")
+        ->required();
     cmd->add_flag("--quiet", a->quiet, "print nothing on success");
     cmd->callback([a] { RunRender(*a); });
 }

@@ -4,9 +4,8 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <sstream>
-
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "app/commands.h"
 #include "core/error.h"
@@ -33,8 +32,10 @@ nlohmann::json ReadMetrics(const std::string& path) {
     if (!f) throw Error(subject + ": cannot open");
     std::stringstream text;
     text << f.rdbuf();
-    nlohmann::json j = nlohmann::json::parse(text.str(), nullptr, /*allow_exceptions=*/false);
-    if (j.is_discarded()) throw Error(subject + ": is not JSON; expected a render's metrics.json");
+    nlohmann::json j =
+        nlohmann::json::parse(text.str(), nullptr, /*allow_exceptions=*/false);
+    if (j.is_discarded())
+        throw Error(subject + ": is not JSON; expected a render's metrics.json");
     if (!j.is_object())
         throw Error(subject + ": is not a JSON object; expected a render's metrics.json");
     return j;
@@ -53,13 +54,15 @@ double Number(const nlohmann::json& j, const std::string& subject, const char* k
 
 void RegisterSummaryCommand(CLI::App& root) {
     auto path = std::make_shared<std::string>();
-    auto* cmd = root.add_subcommand("summary", "print one line from a render's metrics.json");
+    auto* cmd =
+        root.add_subcommand("summary", "print one line from a render's metrics.json");
     cmd->add_option("metrics", *path, "metrics.json written by render")->required();
     cmd->callback([path] {
         const nlohmann::json j = ReadMetrics(*path);
         const std::string subject = "summary \"" + *path + "\"";
         if (!j.contains("method") || !j.at("method").is_string())
-            throw Error(subject + ": has no \"method\" string; not a reliefsim metrics.json");
+            throw Error(subject +
+                        ": has no \"method\" string; not a reliefsim metrics.json");
         const double avgIter = Number(j, subject, "avg_iterations");
         const double avgFetch = Number(j, subject, "avg_fetches");
         const double maxFetch = Number(j, subject, "max_fetches");
@@ -70,7 +73,8 @@ void RegisterSummaryCommand(CLI::App& root) {
         if (avgIter < 0 || avgFetch < 0 || mse < 0)
             throw Error(subject + ": averages and mse_paper must be >= 0");
         std::printf("%-10s %10.3f %10.3f %10.0f %12.4e\n",
-                    j.at("method").get<std::string>().c_str(), avgIter, avgFetch, maxFetch, mse);
+                    j.at("method").get<std::string>().c_str(), avgIter, avgFetch,
+                    maxFetch, mse);
     });
 }
 

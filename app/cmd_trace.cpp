@@ -16,8 +16,9 @@ void RegisterTraceCommand(CLI::App& root) {
     };
     auto a = std::make_shared<TraceArgs>();
     auto* cmd = root.add_subcommand(
-        "trace", "run one pixel's kernel of the scene `render` would draw and print every fetch "
-                 "(uv, ray depth, sampled depth) and the result");
+        "trace",
+        "run one pixel's kernel of the scene `render` would draw and print every fetch "
+        "(uv, ray depth, sampled depth) and the result");
     AddRenderOptions(cmd, a->options, /*withHeatmapScales=*/false);
     cmd->add_option("--pixel", a->pixel, "pixel X,Y (row 0 at the top)")->required();
     cmd->callback([a] {

@@ -1,9 +1,8 @@
 // The reliefsim subcommands: each registers itself on the root CLI11 app.
 #pragma once
 
-#include <string>
-
 #include <CLI/CLI.hpp>
+#include <string>
 
 #include "texture/height_field.h"
 
@@ -14,8 +13,8 @@ struct MapOptions {
     std::string map = "builtin:shapes";  ///< file path or builtin:NAME[:SIZE]
     std::string channel = "auto";        ///< R|G|B|A|auto
     std::string stores = "height";       ///< height|depth
-    /// Set by AddMapOptions: tells whether --map-channel / --map-stores were given (they do
-    /// not apply to a builtin map, and are refused there).
+    /// Set by AddMapOptions: tells whether --map-channel / --map-stores were given (they
+    /// do not apply to a builtin map, and are refused there).
     const CLI::Option* channelOption = nullptr;
     const CLI::Option* storesOption = nullptr;
 };
@@ -32,7 +31,7 @@ void RegisterMethodsCommand(CLI::App& root);
 void RegisterRenderCommand(CLI::App& root);
 void RegisterSummaryCommand(CLI::App& root);
 void RegisterTraceCommand(CLI::App& root);
-void RegisterMapsCommand(CLI::App& root);      // app/cmd_maps.cpp (issue #3)
-void RegisterGlCompareCommand(CLI::App& root); // app/cmd_glcompare.cpp (issue #4)
+void RegisterMapsCommand(CLI::App& root);       // app/cmd_maps.cpp (issue #3)
+void RegisterGlCompareCommand(CLI::App& root);  // app/cmd_glcompare.cpp (issue #4)
 
 }  // namespace reliefsim

@@ -1,11 +1,10 @@
-// `reliefsim glcompare`: the C++ frame loop against the GLSL twins on llvmpipe, bit for bit.
-// Only built when rs_glref exists (EGL and GL found).
+// `reliefsim glcompare`: the C++ frame loop against the GLSL twins on llvmpipe, bit for
+// bit. Only built when rs_glref exists (EGL and GL found).
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "app/pipeline.h"
 #include "app/render_options.h"
@@ -15,7 +14,8 @@
 namespace reliefsim {
 
 /// The GL scene of the settings: the same camera, plane, uniforms, sampler and kernel as
-/// Render(). Precision Float -> R32F, Llvmpipe8 -> R8; Gpu8 has no GL twin (throws Error).
+/// Render(). Precision Float -> R32F, Llvmpipe8 -> R8; Gpu8 has no GL twin (throws
+/// Error).
 GlScene MakeGlScene(const RenderSettings& settings);
 
 /// The C++ triangle index of each pixel (see TrianglePerPixel) for the settings' scene.

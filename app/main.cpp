@@ -34,13 +34,15 @@ int main(int argc, char** argv) {
     // that a subcommand is required).
     std::string names;
     bool known = false;
-    for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
+    for (const CLI::App* sub :
+         app.get_subcommands([](const CLI::App*) { return true; })) {
         names += (names.empty() ? "" : ", ") + sub->get_name();
         known = known || (argc >= 2 && sub->get_name() == argv[1]);
     }
     if (argc >= 2 && argv[1][0] != '-' && !known) {
-        PrintError(std::string("\"") + argv[1] + "\": unknown command; the commands are: " +
-                   names + " (reliefsim COMMAND --help for each)");
+        PrintError(std::string("\"") + argv[1] +
+                   "\": unknown command; the commands are: " + names +
+                   " (reliefsim COMMAND --help for each)");
         return 2;
     }
     try {
@@ -56,8 +58,9 @@ int main(int argc, char** argv) {
         PrintError(e.what());
         return 1;
     } catch (const std::bad_alloc&) {
-        PrintError("out of memory; the run needs more memory than this machine has (try a "
-                   "smaller --size or map)");
+        PrintError(
+            "out of memory; the run needs more memory than this machine has (try a "
+            "smaller --size or map)");
         return 1;
     } catch (const std::exception& e) {
         PrintError(e.what());

@@ -1,16 +1,17 @@
-// The render pipeline: scene set-up, the fragment program running a kernel per lane, outputs.
+// The render pipeline: scene set-up, the fragment program running a kernel per lane,
+// outputs.
 #include "app/pipeline.h"
+
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <charconv>
-#include <cstdio>
 #include <chrono>
-#include <cstdlib>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
-
-#include <tbb/global_control.h>
 
 #include "core/error.h"
 #include "core/memory.h"
@@ -37,15 +38,16 @@ void ValidateSettings(const RenderSettings& s) {
     if (!(s.viewAngle >= 0.0f && s.viewAngle < 90.0f))
         bad("--view-angle " + num(s.viewAngle) + ": must be in [0, 90) degrees");
     if (!(std::fabs(s.azimuth) <= 1e6f))
-        bad("--azimuth " + num(s.azimuth) + ": must be a finite angle in [-1e6, 1e6] degrees");
+        bad("--azimuth " + num(s.azimuth) +
+            ": must be a finite angle in [-1e6, 1e6] degrees");
     if (!(s.depthScale > 0.0f && s.depthScale <= kMaxDepthScale))
-        bad("--depth-scale " + num(s.depthScale) + ": must be in (0, " + num(kMaxDepthScale) +
-            "] plane widths");
+        bad("--depth-scale " + num(s.depthScale) + ": must be in (0, " +
+            num(kMaxDepthScale) + "] plane widths");
     if (!(s.tiling > 0.0f && s.tiling <= kMaxTiling))
         bad("--tiling " + num(s.tiling) + ": must be in (0, " + num(kMaxTiling) + "]");
     if (!(s.distance >= kMinDistance && s.distance <= kMaxDistance))
-        bad("--distance " + num(s.distance) + ": must be in [" + num(kMinDistance) + ", " +
-            num(kMaxDistance) + "] plane widths");
+        bad("--distance " + num(s.distance) + ": must be in [" + num(kMinDistance) +
+            ", " + num(kMaxDistance) + "] plane widths");
     if (!(s.fovY > 0.0f && s.fovY < 180.0f))
         bad("--fov " + num(s.fovY) + ": must be in (0, 180) degrees");
     if (s.threads < 0 || s.threads > kMaxThreads)
@@ -103,14 +105,16 @@ Mesh TexturedPlane(float tiling) {
     return mesh;
 }
 
-// Shading of the hit (not part of the kernel's counts): Lambert with a normal from central
-// differences of the bilinear depth, albedo by depth.
-glm::vec3 Shade(const HeightField& field, const SamplerState& state, glm::vec2 uv, float depth,
-                float slopeScale, bool hit) {
+// Shading of the hit (not part of the kernel's counts): Lambert with a normal from
+// central differences of the bilinear depth, albedo by depth.
+glm::vec3 Shade(const HeightField& field, const SamplerState& state, glm::vec2 uv,
+                float depth, float slopeScale, bool hit) {
     Sampler<false> s(field, state);
     const float du = 1.0f / float(field.width), dv = 1.0f / float(field.height);
-    float ddu = (s.Sample(uv + glm::vec2(du, 0)) - s.Sample(uv - glm::vec2(du, 0))) / (2 * du);
-    float ddv = (s.Sample(uv + glm::vec2(0, dv)) - s.Sample(uv - glm::vec2(0, dv))) / (2 * dv);
+    float ddu =
+        (s.Sample(uv + glm::vec2(du, 0)) - s.Sample(uv - glm::vec2(du, 0))) / (2 * du);
+    float ddv =
+        (s.Sample(uv + glm::vec2(0, dv)) - s.Sample(uv - glm::vec2(0, dv))) / (2 * dv);
     glm::vec3 n(ddu * slopeScale, ddv * slopeScale, 1.0f);
     n = n * (1.0f / std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z));
     glm::vec3 l(-0.4f, -0.5f, 0.77f);
@@ -129,12 +133,19 @@ struct TileTotals {
 
 template <class KernelT>
 class KernelProgram {
-public:
-    KernelProgram(const KernelT& kernel, const HeightField& field, const SamplerState& state,
-                  const ViewUniforms& uniforms, float slopeScale, FrameRecord& record,
-                  std::vector<float>& color, std::vector<TileTotals>& tiles)
-        : kernel_(kernel), field_(field), state_(state), uniforms_(uniforms),
-          slopeScale_(slopeScale), record_(record), color_(color), tiles_(tiles) {}
+  public:
+    KernelProgram(const KernelT& kernel, const HeightField& field,
+                  const SamplerState& state, const ViewUniforms& uniforms,
+                  float slopeScale, FrameRecord& record, std::vector<float>& color,
+                  std::vector<TileTotals>& tiles)
+        : kernel_(kernel),
+          field_(field),
+          state_(state),
+          uniforms_(uniforms),
+          slopeScale_(slopeScale),
+          record_(record),
+          color_(color),
+          tiles_(tiles) {}
 
     void ShadeQuad(const QuadFragment& q, int tileIndex) {
         for (int k = 0; k < 4; ++k) {
@@ -169,7 +180,7 @@ public:
         }
     }
 
-private:
+  private:
     const KernelT& kernel_;
     const HeightField& field_;
     SamplerState state_;
@@ -213,8 +224,8 @@ RenderOutput Render(const HeightField& field, const RenderSettings& s) {
     if (s.threads > 0)
         limit = std::make_unique<tbb::global_control>(
             tbb::global_control::max_allowed_parallelism, size_t(s.threads));
-    out.threads = int(tbb::global_control::active_value(
-        tbb::global_control::max_allowed_parallelism));
+    out.threads = int(
+        tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
 
     out.record.Resize(s.width, s.height);
     out.color.assign(size_t(s.width) * size_t(s.height) * 3, 0.0f);
@@ -228,8 +239,8 @@ RenderOutput Render(const HeightField& field, const RenderSettings& s) {
     RasterStats stats = std::visit(
         [&](const auto& k) {
             using K = std::decay_t<decltype(k)>;
-            KernelProgram<K> program(k, field, s.sampler, uniforms, slopeScale, out.record,
-                                     out.color, tiles);
+            KernelProgram<K> program(k, field, s.sampler, uniforms, slopeScale,
+                                     out.record, out.color, tiles);
             return RasterizeFrame(mesh, camera, s.width, s.height, program);
         },
         kernel);
@@ -250,8 +261,10 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
     const FrameSummary& m = out.summary;
     nlohmann::json params = nlohmann::json::object();
     for (const auto& [k, v] : out.params) {
-        if (v == std::floor(v)) params[k] = int64_t(v);
-        else params[k] = v;
+        if (v == std::floor(v))
+            params[k] = int64_t(v);
+        else
+            params[k] = v;
     }
     nlohmann::json j;
     j["method"] = s.method;
@@ -302,10 +315,10 @@ void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
     std::error_code ec;
     if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
         throw Error("--out \"" + outDir + "\": exists and is not a directory");
-    // All five files are staged as temporaries beside their destinations (or in the nearest
-    // existing ancestor while the folder does not exist) and replace what was there only
-    // once every one is complete, all or nothing (core/output_set.h). Every destination is
-    // checked before anything is written.
+    // All five files are staged as temporaries beside their destinations (or in the
+    // nearest existing ancestor while the folder does not exist) and replace what was
+    // there only once every one is complete, all or nothing (core/output_set.h). Every
+    // destination is checked before anything is written.
     OutputSet outputs("--out \"" + outDir + "\"");
     auto dest = [&](const char* name) { return (dir / name).string(); };
     for (const char* name :
@@ -335,14 +348,13 @@ void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
     WriteHeatmapPng(dest("fetches.png"), fetches.data(), mask.data(), w, h,
                     {s.fetchScaleMin, s.fetchScaleMax, "inferno", "fetches, " + s.method},
                     &outputs);
-    WriteMultiChannelExr(dest("record.exr"), w, h,
-                         {"hit_u", "hit_v", "hit_depth", "coarse_iterations",
-                          "refine_iterations", "iterations", "fetches", "texel_reads",
-                          "flags", "error_paper"},
-                         {r.hitU.data(), r.hitV.data(), r.hitDepth.data(), coarse.data(),
-                          refine.data(), iters.data(), fetches.data(), texels.data(),
-                          flags.data(), err.data()},
-                         &outputs);
+    WriteMultiChannelExr(
+        dest("record.exr"), w, h,
+        {"hit_u", "hit_v", "hit_depth", "coarse_iterations", "refine_iterations",
+         "iterations", "fetches", "texel_reads", "flags", "error_paper"},
+        {r.hitU.data(), r.hitV.data(), r.hitDepth.data(), coarse.data(), refine.data(),
+         iters.data(), fetches.data(), texels.data(), flags.data(), err.data()},
+        &outputs);
     outputs.Write(dest("metrics.json"), MetricsJson(out, s, field).dump(2) + "\n");
     outputs.Commit();
 }

@@ -1,10 +1,10 @@
-// The render pipeline: scene set-up, the fragment program running a kernel per lane, outputs.
+// The render pipeline: scene set-up, the fragment program running a kernel per lane,
+// outputs.
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "core/record.h"
 #include "kernels/registry.h"
@@ -29,14 +29,14 @@ struct RenderSettings {
     std::string method = "relief";
     std::vector<std::string> set;  ///< "key=value" kernel parameters
     int width = 512, height = 512;
-    float viewAngle = 45.0f;   ///< degrees from the plane normal, [0, 90)
-    float azimuth = 0.0f;      ///< degrees around the normal
-    float distance = 1.0f;     ///< camera distance from the plane centre, plane units
-    float fovY = 45.0f;        ///< vertical field of view, degrees
-    float depthScale = 0.1f;   ///< relief depth in plane units; > 0
-    float tiling = 1.0f;       ///< texture repeats across the plane; > 0
-    SamplerState sampler;      ///< height-map filter and wrap
-    int threads = 0;           ///< worker threads; 0 = all cores
+    float viewAngle = 45.0f;  ///< degrees from the plane normal, [0, 90)
+    float azimuth = 0.0f;     ///< degrees around the normal
+    float distance = 1.0f;    ///< camera distance from the plane centre, plane units
+    float fovY = 45.0f;       ///< vertical field of view, degrees
+    float depthScale = 0.1f;  ///< relief depth in plane units; > 0
+    float tiling = 1.0f;      ///< texture repeats across the plane; > 0
+    SamplerState sampler;     ///< height-map filter and wrap
+    int threads = 0;          ///< worker threads; 0 = all cores
     float iterScaleMin = 0.0f, iterScaleMax = 64.0f;    ///< iterations heatmap scale
     float fetchScaleMin = 0.0f, fetchScaleMax = 64.0f;  ///< fetches heatmap scale
 };
@@ -45,10 +45,11 @@ struct RenderSettings {
 /// scales, method, parameters).
 void ValidateSettings(const RenderSettings& settings);
 
-/// Bytes per pixel of one Render() plus WriteRenderOutputs(): the record, the colour buffer
-/// and the output conversions (measured: about 107 bytes per pixel at 1024² and 2048²,
-/// `/usr/bin/time -v reliefsim render --size 2048x2048`). glcompare, which keeps two records
-/// and llvmpipe's targets and their read-back, needs kGlCompareBytesPerPixel.
+/// Bytes per pixel of one Render() plus WriteRenderOutputs(): the record, the colour
+/// buffer and the output conversions (measured: about 107 bytes per pixel at 1024² and
+/// 2048²,
+/// `/usr/bin/time -v reliefsim render --size 2048x2048`). glcompare, which keeps two
+/// records and llvmpipe's targets and their read-back, needs kGlCompareBytesPerPixel.
 constexpr uint64_t kRenderBytesPerPixel = 112, kGlCompareBytesPerPixel = 320;
 
 /// Peak memory of a frame of width x height at `bytesPerPixel`, plus a fixed base. The
@@ -57,8 +58,8 @@ uint64_t EstimateFrameBytes(int width, int height,
                             uint64_t bytesPerPixel = kRenderBytesPerPixel);
 
 /// Throws Error naming --size when such a frame needs more memory than is available
-/// (core/memory.h): "--size WxH: needs about 28.0 GiB of memory, 20.1 GiB available; use a
-/// smaller --size".
+/// (core/memory.h): "--size WxH: needs about 28.0 GiB of memory, 20.1 GiB available; use
+/// a smaller --size".
 void RequireFrameMemory(int width, int height,
                         uint64_t bytesPerPixel = kRenderBytesPerPixel);
 
@@ -78,18 +79,19 @@ ViewUniforms MakeViewUniforms(const RenderSettings& settings);
 /// Renders one frame of the textured plane with the settings' method.
 RenderOutput Render(const HeightField& field, const RenderSettings& settings);
 
-/// metrics.json content: the contract keys plus extras; timing fields only under "timing".
+/// metrics.json content: the contract keys plus extras; timing fields only under
+/// "timing".
 nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& settings,
                            const HeightField& field);
 
-/// Writes color.png, iterations.png, fetches.png, record.exr and metrics.json into outDir,
-/// all or nothing (core/output_set.h): every destination is checked first (a folder or
-/// other non-file standing where an output goes, a name too long: Error, nothing written),
-/// the files are written to temporaries and replace the previous outputs together; any
-/// failure restores what was there and removes the folders this call created. Files in
-/// outDir that are not outputs are never touched. Missing folders are created as mkdir
-/// does (mode 0777 & ~umask). Every file but metrics.json's "timing" is byte-identical for
-/// equal inputs and any thread count.
+/// Writes color.png, iterations.png, fetches.png, record.exr and metrics.json into
+/// outDir, all or nothing (core/output_set.h): every destination is checked first (a
+/// folder or other non-file standing where an output goes, a name too long: Error,
+/// nothing written), the files are written to temporaries and replace the previous
+/// outputs together; any failure restores what was there and removes the folders this
+/// call created. Files in outDir that are not outputs are never touched. Missing folders
+/// are created as mkdir does (mode 0777 & ~umask). Every file but metrics.json's "timing"
+/// is byte-identical for equal inputs and any thread count.
 void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
                         const RenderSettings& settings, const HeightField& field);
 

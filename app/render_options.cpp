@@ -1,4 +1,5 @@
-// The options of `reliefsim render`, shared by render, glcompare and the llvmpipe benchmark.
+// The options of `reliefsim render`, shared by render, glcompare and the llvmpipe
+// benchmark.
 #include "app/render_options.h"
 
 #include <cstdio>
@@ -32,9 +33,9 @@ void ParseScale(const std::string& opt, const std::string& text, float& lo, floa
         b = ParseFiniteFloat(std::string_view(text).substr(c + 1));
     }
     if (!a || !b)
-        throw Error(opt + " \"" + text + "\": expected MIN:MAX with finite numbers, e.g. 0:64");
-    if (!(*b > *a))
-        throw Error(opt + " \"" + text + "\": MAX must be greater than MIN");
+        throw Error(opt + " \"" + text +
+                    "\": expected MIN:MAX with finite numbers, e.g. 0:64");
+    if (!(*b > *a)) throw Error(opt + " \"" + text + "\": MAX must be greater than MIN");
     lo = *a;
     hi = *b;
 }
@@ -43,14 +44,16 @@ void ParseScale(const std::string& opt, const std::string& text, float& lo, floa
 
 void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
     AddMapOptions(cmd, o.map);
-    cmd->add_option("--method", o.settings.method, "method name (see `reliefsim methods`)")
+    cmd->add_option("--method", o.settings.method,
+                    "method name (see `reliefsim methods`)")
         ->capture_default_str();
     cmd->add_option("--set", o.settings.set, "kernel parameter key=value (repeatable)");
     cmd->add_option("--size", o.size, "framebuffer WxH")->capture_default_str();
     cmd->add_option("--view-angle", o.settings.viewAngle,
                     "degrees between the view direction and the plane normal, [0, 90)")
         ->capture_default_str();
-    cmd->add_option("--azimuth", o.settings.azimuth, "camera azimuth around the normal, degrees")
+    cmd->add_option("--azimuth", o.settings.azimuth,
+                    "camera azimuth around the normal, degrees")
         ->capture_default_str();
     cmd->add_option("--distance", o.settings.distance, "camera distance, plane widths")
         ->capture_default_str();
@@ -63,10 +66,12 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
         ->capture_default_str();
     cmd->add_option("--filter", o.filter, "height sampler filter: nearest|bilinear|min4")
         ->capture_default_str();
-    cmd->add_option("--wrap", o.wrap, "height sampler wrap: repeat|clamp")->capture_default_str();
-    cmd->add_option("--texture-format", o.textureFormat,
-                    "height texture: r32f (float) or r8 (8-bit unorm, filtered in llvmpipe's "
-                    "8.8 fixed point; the map is quantised)")
+    cmd->add_option("--wrap", o.wrap, "height sampler wrap: repeat|clamp")
+        ->capture_default_str();
+    cmd->add_option(
+           "--texture-format", o.textureFormat,
+           "height texture: r32f (float) or r8 (8-bit unorm, filtered in llvmpipe's "
+           "8.8 fixed point; the map is quantised)")
         ->capture_default_str();
     cmd->add_option("--threads", o.settings.threads, "worker threads (0 = all cores)")
         ->capture_default_str()
@@ -82,7 +87,8 @@ void ResolveRenderSettings(RenderOptions& o) {
     RenderSettings& s = o.settings;
     ParseSize(o.size, s.width, s.height);
     auto filter = ParseFilter(o.filter);
-    if (!filter) throw Error("--filter \"" + o.filter + "\": must be nearest, bilinear or min4");
+    if (!filter)
+        throw Error("--filter \"" + o.filter + "\": must be nearest, bilinear or min4");
     auto wrap = ParseWrapMode(o.wrap);
     if (!wrap) throw Error("--wrap \"" + o.wrap + "\": must be repeat or clamp");
     s.sampler.filter = *filter;
@@ -99,22 +105,27 @@ void ResolveRenderSettings(RenderOptions& o) {
     ValidateSettings(s);
 }
 
-std::pair<int, int> ParsePixel(const std::string& option, const std::string& text, int width,
-                               int height) {
+std::pair<int, int> ParsePixel(const std::string& option, const std::string& text,
+                               int width, int height) {
     const size_t comma = text.find(',');
-    if (text.empty() || comma == std::string::npos || comma == 0 || comma + 1 == text.size())
-        throw Error(option + " \"" + text + "\": expected X,Y, e.g. 10,20 (row 0 at the top)");
+    if (text.empty() || comma == std::string::npos || comma == 0 ||
+        comma + 1 == text.size())
+        throw Error(option + " \"" + text +
+                    "\": expected X,Y, e.g. 10,20 (row 0 at the top)");
     const std::string subject = option + " \"" + text + "\":";
-    const int x = int(ParseIntInRange(std::string_view(text).substr(0, comma), 0, width - 1,
-                                      subject + " X (the image is " + std::to_string(width) +
-                                          "x" + std::to_string(height) + ")"));
-    const int y = int(ParseIntInRange(std::string_view(text).substr(comma + 1), 0, height - 1,
-                                      subject + " Y (the image is " + std::to_string(width) +
-                                          "x" + std::to_string(height) + ")"));
+    const int x =
+        int(ParseIntInRange(std::string_view(text).substr(0, comma), 0, width - 1,
+                            subject + " X (the image is " + std::to_string(width) + "x" +
+                                std::to_string(height) + ")"));
+    const int y =
+        int(ParseIntInRange(std::string_view(text).substr(comma + 1), 0, height - 1,
+                            subject + " Y (the image is " + std::to_string(width) + "x" +
+                                std::to_string(height) + ")"));
     return {x, y};
 }
 
-void CheckOutputFile(const std::string& option, const std::string& path, bool folderIsCreated) {
+void CheckOutputFile(const std::string& option, const std::string& path,
+                     bool folderIsCreated) {
     if (!folderIsCreated) {
         std::error_code ec;
         const std::filesystem::path folder =

@@ -2,11 +2,10 @@
 // (render, glcompare, bench/frame_vs_llvmpipe), so they stay identical.
 #pragma once
 
+#include <CLI/CLI.hpp>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <CLI/CLI.hpp>
 
 #include "app/commands.h"
 #include "app/pipeline.h"
@@ -19,23 +18,25 @@ struct RenderOptions {
     RenderSettings settings;
     std::string size = "512x512";
     std::string filter = "bilinear", wrap = "repeat";
-    std::string textureFormat = "r32f";  ///< r32f | r8 (8-bit unorm, llvmpipe fixed point)
+    std::string textureFormat =
+        "r32f";  ///< r32f | r8 (8-bit unorm, llvmpipe fixed point)
     std::string iterScale, fetchScale;
 };
 
 /// Adds render's scene options (map, method, set, size, camera, sampler, texture format,
-/// threads and, when asked, the heatmap scales) to cmd. Output options (--out, --quiet) are
-/// the command's own. Commands that write no heatmap leave the scales out, so giving them
-/// is an error rather than silently ignored.
-void AddRenderOptions(CLI::App* cmd, RenderOptions& options, bool withHeatmapScales = true);
+/// threads and, when asked, the heatmap scales) to cmd. Output options (--out, --quiet)
+/// are the command's own. Commands that write no heatmap leave the scales out, so giving
+/// them is an error rather than silently ignored.
+void AddRenderOptions(CLI::App* cmd, RenderOptions& options,
+                      bool withHeatmapScales = true);
 
 /// Parses the text options into options.settings and validates them (throws Error).
 void ResolveRenderSettings(RenderOptions& options);
 
 /// Parses "X,Y" (row 0 at the top) for `option` and checks it lies inside width x height;
 /// throws Error naming the option otherwise.
-std::pair<int, int> ParsePixel(const std::string& option, const std::string& text, int width,
-                               int height);
+std::pair<int, int> ParsePixel(const std::string& option, const std::string& text,
+                               int width, int height);
 
 /// Checks, before any work, that `path` can receive an output file (the checks of
 /// core/output_set.h CheckOutputDestination; with !folderIsCreated its folder must also
@@ -45,8 +46,8 @@ void CheckOutputFile(const std::string& option, const std::string& path,
 
 /// The files `render --out DIR` writes.
 inline const std::vector<std::string>& RenderOutputNames() {
-    static const std::vector<std::string> kNames = {"color.png", "iterations.png", "fetches.png",
-                                                    "record.exr", "metrics.json"};
+    static const std::vector<std::string> kNames = {
+        "color.png", "iterations.png", "fetches.png", "record.exr", "metrics.json"};
     return kNames;
 }
 
@@ -57,8 +58,8 @@ inline const std::vector<std::string>& RenderOutputNames() {
 void CheckOutputDirectory(const std::string& option, const std::string& dir,
                           const std::vector<std::string>& outputs = RenderOutputNames());
 
-/// Loads the map; with --texture-format r8 quantises it to 8 bits (keeping depth8) unless it
-/// already came from 8-bit data.
+/// Loads the map; with --texture-format r8 quantises it to 8 bits (keeping depth8) unless
+/// it already came from 8-bit data.
 HeightField LoadRenderMap(const RenderOptions& options);
 
 }  // namespace reliefsim

@@ -13,8 +13,9 @@ namespace {
 
 /// Wraps the counting sampler and records every call (HeightSampler concept).
 class TracingSampler {
-public:
-    TracingSampler(CountingSampler& inner, const MarchInput& in, std::vector<TraceFetch>& log)
+  public:
+    TracingSampler(CountingSampler& inner, const MarchInput& in,
+                   std::vector<TraceFetch>& log)
         : inner_(inner), in_(in), log_(log) {}
     float Sample(glm::vec2 uv) {
         float d = inner_.Sample(uv);
@@ -26,7 +27,7 @@ public:
         return d;
     }
 
-private:
+  private:
     CountingSampler& inner_;
     const MarchInput& in_;
     std::vector<TraceFetch>& log_;
@@ -49,18 +50,20 @@ PixelTrace TracePixel(const HeightField& field, const RenderSettings& s, int x, 
     detail::DenormalsAreZeroScope gpuFloatMode;  // as in the frame loop's tiles
     CountingSampler counting(field, s.sampler, &trace.counts);
     TracingSampler tracing(counting, trace.input, trace.fetches);
-    trace.result = std::visit([&](const auto& k) { return k.March(trace.input, tracing); }, kernel);
+    trace.result =
+        std::visit([&](const auto& k) { return k.March(trace.input, tracing); }, kernel);
     return trace;
 }
 
 std::string FormatTrace(const PixelTrace& t) {
     std::string s;
     char line[256];
-    std::snprintf(line, sizeof line,
-                  "pixel (%d, %d): ray enters at uv (%.9g, %.9g), moves (%.9g, %.9g) uv per unit "
-                  "depth\n",
-                  t.x, t.y, double(t.input.uvEntry.x), double(t.input.uvEntry.y),
-                  double(t.input.dirUv.x), double(t.input.dirUv.y));
+    std::snprintf(
+        line, sizeof line,
+        "pixel (%d, %d): ray enters at uv (%.9g, %.9g), moves (%.9g, %.9g) uv per unit "
+        "depth\n",
+        t.x, t.y, double(t.input.uvEntry.x), double(t.input.uvEntry.y),
+        double(t.input.dirUv.x), double(t.input.dirUv.y));
     s += line;
     s += "  fetch          u            v   ray depth t~  sampled depth\n";
     for (size_t k = 0; k < t.fetches.size(); ++k) {
@@ -71,13 +74,14 @@ std::string FormatTrace(const PixelTrace& t) {
                       double(f.uv.x), double(f.uv.y), t, double(f.depth));
         s += line;
     }
-    std::snprintf(line, sizeof line,
-                  "result: %s at uv (%.9g, %.9g), depth %.9g; %u coarse + %u refine iterations, "
-                  "%u fetches, %u texel reads%s\n",
-                  t.result.hit ? "hit" : "no hit", double(t.result.uvHit.x),
-                  double(t.result.uvHit.y), double(t.result.depthHit), unsigned(t.result.nCoarse),
-                  unsigned(t.result.nRefine), t.counts.nFetches, t.counts.nTexelReads,
-                  t.result.budgetExhausted ? ", budget exhausted" : "");
+    std::snprintf(
+        line, sizeof line,
+        "result: %s at uv (%.9g, %.9g), depth %.9g; %u coarse + %u refine iterations, "
+        "%u fetches, %u texel reads%s\n",
+        t.result.hit ? "hit" : "no hit", double(t.result.uvHit.x),
+        double(t.result.uvHit.y), double(t.result.depthHit), unsigned(t.result.nCoarse),
+        unsigned(t.result.nRefine), t.counts.nFetches, t.counts.nTexelReads,
+        t.result.budgetExhausted ? ", budget exhausted" : "");
     s += line;
     return s;
 }

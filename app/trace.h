@@ -9,9 +9,9 @@
 namespace reliefsim {
 
 struct TraceFetch {
-    glm::vec2 uv;   ///< where the sampler was called
-    float t;        ///< the ray depth at that uv (recovered from the ray), NaN if ambiguous
-    float depth;    ///< what the sampler returned
+    glm::vec2 uv;  ///< where the sampler was called
+    float t;      ///< the ray depth at that uv (recovered from the ray), NaN if ambiguous
+    float depth;  ///< what the sampler returned
 };
 
 struct PixelTrace {
@@ -22,10 +22,11 @@ struct PixelTrace {
     std::vector<TraceFetch> fetches;
 };
 
-/// Runs the settings' kernel for pixel (x, y) alone, recording every fetch. The kernel, sampler
-/// and inputs are those of Render(), so the result equals the frame's record at that pixel.
-/// Throws Error for a pixel outside the image.
-PixelTrace TracePixel(const HeightField& field, const RenderSettings& settings, int x, int y);
+/// Runs the settings' kernel for pixel (x, y) alone, recording every fetch. The kernel,
+/// sampler and inputs are those of Render(), so the result equals the frame's record at
+/// that pixel. Throws Error for a pixel outside the image.
+PixelTrace TracePixel(const HeightField& field, const RenderSettings& settings, int x,
+                      int y);
 
 /// Human-readable trace: the ray, one line per fetch, and the result.
 std::string FormatTrace(const PixelTrace& trace);

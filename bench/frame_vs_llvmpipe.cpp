@@ -1,13 +1,15 @@
 // Whole-frame timing: the simulator's frame loop against the GLSL twin on llvmpipe, same
 // scene, kernel, resolution and thread count (research/llvmpipe.md §4).
 //
-//   frame_vs_llvmpipe --method relief --size 512x512 --threads 1 [render's map/scene options]
+//   frame_vs_llvmpipe --method relief --size 512x512 --threads 1 [render's map/scene
+//   options]
 //
 // Simulator: Render() with --threads worker threads; the time is the frame loop
 // (RenderOutput::frameSeconds). llvmpipe: LP_NUM_THREADS = --threads (all cores for 0),
 // shader disk cache off, one warm-up draw (JIT) plus two more, then per frame draw +
 // glFinish on a steady clock, no lane probe. Both report the median of --frames (>= 5).
 // The last line is `ratio=<simulator ms / llvmpipe ms>`.
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -16,8 +18,6 @@
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <CLI/CLI.hpp>
 
 #include "app/glcompare.h"
 #include "core/error.h"
@@ -42,7 +42,8 @@ std::string CpuModel() {
 }
 
 int Run(int argc, char** argv) {
-    CLI::App app{"frame_vs_llvmpipe: ms/frame of the simulator and of llvmpipe for one scene"};
+    CLI::App app{
+        "frame_vs_llvmpipe: ms/frame of the simulator and of llvmpipe for one scene"};
     RenderOptions o;
     o.size = "512x512";
     int frames = 7;
@@ -57,12 +58,14 @@ int Run(int argc, char** argv) {
     if (frames < 5) throw Error("--frames " + std::to_string(frames) + ": must be >= 5");
     ResolveRenderSettings(o);
     RenderSettings& s = o.settings;
-    const int threads =
-        s.threads > 0 ? s.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+    const int threads = s.threads > 0
+                            ? s.threads
+                            : int(std::max(1u, std::thread::hardware_concurrency()));
     s.threads = threads;
     HeightField field = LoadRenderMap(o);
 
-    // llvmpipe first: LP_NUM_THREADS and the cache switch must be set before its screen exists.
+    // llvmpipe first: LP_NUM_THREADS and the cache switch must be set before its screen
+    // exists.
     setenv("MESA_SHADER_CACHE_DISABLE", "true", 1);
     GlReference gl(threads);
     GlScene scene = MakeGlScene(s);
@@ -73,9 +76,9 @@ int Run(int argc, char** argv) {
     for (int k = 0; k < frames; ++k) {
         auto t0 = std::chrono::steady_clock::now();
         gl.DrawAndFinish();
-        glMs.push_back(
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
-                .count());
+        glMs.push_back(std::chrono::duration<double, std::milli>(
+                           std::chrono::steady_clock::now() - t0)
+                           .count());
     }
     const GlFrame glFrame = gl.ReadBack();
 
@@ -93,11 +96,11 @@ int Run(int argc, char** argv) {
     std::printf("fetches/px %.3f, lane-fetches (4x2) %llu; records bit-identical: %s\n",
                 warm.summary.avgFetches, (unsigned long long)warm.summary.laneFetches4x2,
                 cmp.AllIdentical() ? "yes" : "NO");
-    std::printf("simulator: %.3f ms/frame (median of %d; min %.3f, max %.3f)\n", sim, frames,
-                *std::min_element(simMs.begin(), simMs.end()),
+    std::printf("simulator: %.3f ms/frame (median of %d; min %.3f, max %.3f)\n", sim,
+                frames, *std::min_element(simMs.begin(), simMs.end()),
                 *std::max_element(simMs.begin(), simMs.end()));
-    std::printf("llvmpipe:  %.3f ms/frame (median of %d; min %.3f, max %.3f)\n", ref, frames,
-                *std::min_element(glMs.begin(), glMs.end()),
+    std::printf("llvmpipe:  %.3f ms/frame (median of %d; min %.3f, max %.3f)\n", ref,
+                frames, *std::min_element(glMs.begin(), glMs.end()),
                 *std::max_element(glMs.begin(), glMs.end()));
     std::printf("ratio=%.4f\n", sim / ref);
     return 0;

@@ -43,8 +43,9 @@ inline bool ReadMemAvailable(uint64_t& bytes) {
 
 }  // namespace detail
 
-/// RELIEFSIM_MEMORY_LIMIT (bytes, or with a K, M or G suffix: "512M"), when set: a cap the
-/// user (or a fuzzer, whose allocation limit the kernel does not know of) puts on a run.
+/// RELIEFSIM_MEMORY_LIMIT (bytes, or with a K, M or G suffix: "512M"), when set: a cap
+/// the user (or a fuzzer, whose allocation limit the kernel does not know of) puts on a
+/// run.
 inline bool ReadMemoryLimitEnv(uint64_t& bytes) {
     const char* text = std::getenv("RELIEFSIM_MEMORY_LIMIT");
     if (!text || !*text) return false;
@@ -52,18 +53,23 @@ inline bool ReadMemoryLimitEnv(uint64_t& bytes) {
     const unsigned long long v = std::strtoull(text, &end, 10);
     if (end == text) return false;
     uint64_t scale = 1;
-    if (*end == 'K' || *end == 'k') scale = 1ull << 10;
-    else if (*end == 'M' || *end == 'm') scale = 1ull << 20;
-    else if (*end == 'G' || *end == 'g') scale = 1ull << 30;
-    else if (*end != '\0') return false;
+    if (*end == 'K' || *end == 'k')
+        scale = 1ull << 10;
+    else if (*end == 'M' || *end == 'm')
+        scale = 1ull << 20;
+    else if (*end == 'G' || *end == 'g')
+        scale = 1ull << 30;
+    else if (*end != '\0')
+        return false;
     bytes = uint64_t(v) * scale;
     return true;
 }
 
-/// Bytes this process can still allocate: the smallest of RELIEFSIM_MEMORY_LIMIT, the kernel's MemAvailable, the
-/// cgroup's limit minus its usage (v2 memory.max / memory.current, or v1), and the address-
-/// space and data-segment limits (RLIMIT_AS, RLIMIT_DATA, e.g. from `ulimit -v`). A source
-/// that cannot be read does not limit; with none readable the answer is UINT64_MAX.
+/// Bytes this process can still allocate: the smallest of RELIEFSIM_MEMORY_LIMIT, the
+/// kernel's MemAvailable, the cgroup's limit minus its usage (v2 memory.max /
+/// memory.current, or v1), and the address- space and data-segment limits (RLIMIT_AS,
+/// RLIMIT_DATA, e.g. from `ulimit -v`). A source that cannot be read does not limit; with
+/// none readable the answer is UINT64_MAX.
 inline uint64_t AvailableMemoryBytes() {
     uint64_t best = UINT64_MAX, v = 0, used = 0;
     if (ReadMemoryLimitEnv(v)) best = v;
@@ -71,7 +77,8 @@ inline uint64_t AvailableMemoryBytes() {
     if (detail::ReadFirstNumber("/sys/fs/cgroup/memory.max", v)) {
         detail::ReadFirstNumber("/sys/fs/cgroup/memory.current", used);
         best = std::min(best, v > used ? v - used : 0);
-    } else if (detail::ReadFirstNumber("/sys/fs/cgroup/memory/memory.limit_in_bytes", v) &&
+    } else if (detail::ReadFirstNumber("/sys/fs/cgroup/memory/memory.limit_in_bytes",
+                                       v) &&
                v < (uint64_t(1) << 60)) {
         used = 0;
         detail::ReadFirstNumber("/sys/fs/cgroup/memory/memory.usage_in_bytes", used);
@@ -95,14 +102,17 @@ inline std::string FormatBytes(uint64_t bytes) {
         ++u;
     }
     char buf[32];
-    if (u == 0) std::snprintf(buf, sizeof buf, "%llu B", static_cast<unsigned long long>(bytes));
-    else std::snprintf(buf, sizeof buf, "%.1f %s", v, units[u]);
+    if (u == 0)
+        std::snprintf(buf, sizeof buf, "%llu B", static_cast<unsigned long long>(bytes));
+    else
+        std::snprintf(buf, sizeof buf, "%.1f %s", v, units[u]);
     return buf;
 }
 
-/// Throws Error "SUBJECT: needs about N of memory, M available; HINT" when `bytes` exceeds
-/// what AvailableMemoryBytes() reports (leaving a 5% margin for everything else).
-inline void RequireMemory(uint64_t bytes, const std::string& subject, const std::string& hint) {
+/// Throws Error "SUBJECT: needs about N of memory, M available; HINT" when `bytes`
+/// exceeds what AvailableMemoryBytes() reports (leaving a 5% margin for everything else).
+inline void RequireMemory(uint64_t bytes, const std::string& subject,
+                          const std::string& hint) {
     const uint64_t avail = AvailableMemoryBytes();
     if (avail == UINT64_MAX) return;
     if (double(bytes) > 0.95 * double(avail))

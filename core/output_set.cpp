@@ -32,7 +32,6 @@ std::string Quote(const std::string& s) { return "\"" + s + "\""; }
 
 std::string ErrnoText(int e) { return std::strerror(e); }
 
-
 /// Six characters from [a-z0-9] that differ between calls and processes. The names never
 /// reach an output, so they need not be reproducible; O_EXCL / link() make them unique.
 std::string RandomTag() {

@@ -14,8 +14,8 @@
 
 namespace reliefsim {
 
-/// A decimal integer that is the whole of `text` (optional leading '-', no spaces, no '+',
-/// no hex); nullopt when it is not one or does not fit in int64.
+/// A decimal integer that is the whole of `text` (optional leading '-', no spaces, no
+/// '+', no hex); nullopt when it is not one or does not fit in int64.
 inline std::optional<int64_t> ParseInt64(std::string_view text) {
     int64_t v = 0;
     auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
@@ -33,8 +33,9 @@ inline bool LooksLikeInteger(std::string_view text) {
     return true;
 }
 
-/// Parses an integer in [lo, hi]; otherwise throws Error "SUBJECT "TEXT": WHY; expected an
-/// integer in [lo, hi]". `subject` names the option or parameter (e.g. "--size width").
+/// Parses an integer in [lo, hi]; otherwise throws Error "SUBJECT "TEXT": WHY; expected
+/// an integer in [lo, hi]". `subject` names the option or parameter (e.g. "--size
+/// width").
 inline int64_t ParseIntInRange(std::string_view text, int64_t lo, int64_t hi,
                                const std::string& subject) {
     const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
@@ -46,8 +47,10 @@ inline int64_t ParseIntInRange(std::string_view text, int64_t lo, int64_t hi,
                     "; expected an integer in " + range);
     }
     if (*v < lo || *v > hi)
-        throw Error(subject + " \"" + std::string(text) + "\": is out of range; expected an "
-                    "integer in " + range);
+        throw Error(subject + " \"" + std::string(text) +
+                    "\": is out of range; expected an "
+                    "integer in " +
+                    range);
     return *v;
 }
 

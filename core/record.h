@@ -1,4 +1,5 @@
-// The per-pixel record shared by kernels (producer), the frame loop and metrics (consumers).
+// The per-pixel record shared by kernels (producer), the frame loop and metrics
+// (consumers).
 #pragma once
 
 #include <cstddef>
@@ -9,23 +10,27 @@ namespace reliefsim {
 
 /// Per-pixel flags (bit set).
 enum PixelFlags : uint8_t {
-    kFlagCovered = 1u << 0,          ///< a triangle covers the pixel centre and passed depth
-    kFlagHelper = 1u << 1,           ///< reserved: helper lanes write nothing, so never set in a frame
-    kFlagBudgetExhausted = 1u << 2,  ///< the kernel stopped because its fetch budget ran out
-    kFlagNoHit = 1u << 3,            ///< the coarse search left the relief without a hit
+    kFlagCovered = 1u << 0,  ///< a triangle covers the pixel centre and passed depth
+    kFlagHelper =
+        1u << 1,  ///< reserved: helper lanes write nothing, so never set in a frame
+    kFlagBudgetExhausted =
+        1u << 2,           ///< the kernel stopped because its fetch budget ran out
+    kFlagNoHit = 1u << 3,  ///< the coarse search left the relief without a hit
 };
 
-/// One frame's per-pixel record, structure of arrays, row-major, row 0 at the top of the image.
-/// Uncovered pixels hold zeros. Filled by tiles that each own their pixels.
+/// One frame's per-pixel record, structure of arrays, row-major, row 0 at the top of the
+/// image. Uncovered pixels hold zeros. Filled by tiles that each own their pixels.
 struct FrameRecord {
     int width = 0, height = 0;
-    std::vector<float> hitU, hitV;     ///< texture uv of the hit (tiling included, unwrapped)
-    std::vector<float> hitDepth;       ///< ray depth at the hit, in [0,1] (0 = top surface)
-    std::vector<uint16_t> nCoarse;     ///< coarse-search iterations (linear / cone)
-    std::vector<uint16_t> nRefine;     ///< refinement iterations (binary / secant / interval)
-    std::vector<uint32_t> nFetches;    ///< sampler calls by the pixel's own lane
-    std::vector<uint32_t> nTexelReads; ///< texels read by those calls
-    std::vector<uint8_t> flags;        ///< PixelFlags
+    std::vector<float> hitU,
+        hitV;                     ///< texture uv of the hit (tiling included, unwrapped)
+    std::vector<float> hitDepth;  ///< ray depth at the hit, in [0,1] (0 = top surface)
+    std::vector<uint16_t> nCoarse;  ///< coarse-search iterations (linear / cone)
+    std::vector<uint16_t>
+        nRefine;  ///< refinement iterations (binary / secant / interval)
+    std::vector<uint32_t> nFetches;     ///< sampler calls by the pixel's own lane
+    std::vector<uint32_t> nTexelReads;  ///< texels read by those calls
+    std::vector<uint8_t> flags;         ///< PixelFlags
 
     // Per-frame totals of helper lanes (they execute, are counted, and write nothing).
     uint64_t nHelperLanes = 0;

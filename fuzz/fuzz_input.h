@@ -9,8 +9,8 @@
 
 namespace reliefsim::fuzz {
 
-/// The input split on '\n' (a trailing '\r' is kept: it is part of the fuzzed text). An empty
-/// input gives no lines; a final empty line after the last '\n' is dropped.
+/// The input split on '\n' (a trailing '\r' is kept: it is part of the fuzzed text). An
+/// empty input gives no lines; a final empty line after the last '\n' is dropped.
 inline std::vector<std::string> SplitLines(const uint8_t* data, size_t size) {
     std::vector<std::string> lines;
     std::string_view text(reinterpret_cast<const char*>(data), size);

@@ -1,8 +1,9 @@
-// Fuzz harness: the image loaders (texture/image_io.h LoadHeightMapFile, texture/cone_map.h
-// LoadExternalConeMap) on arbitrary file contents.
+// Fuzz harness: the image loaders (texture/image_io.h LoadHeightMapFile,
+// texture/cone_map.h LoadExternalConeMap) on arbitrary file contents.
 //
-// Input layout: byte 0 picks the file name's extension (kExtensions, by value modulo its size;
-// the last entry is no extension, so OpenImageIO probes every reader), byte 1 the options:
+// Input layout: byte 0 picks the file name's extension (kExtensions, by value modulo its
+// size; the last entry is no extension, so OpenImageIO probes every reader), byte 1 the
+// options:
 //   bit 7 = 0: LoadHeightMapFile, channel = (bits 0-2) % 5 (Auto, R, G, B, A),
 //              stores = bit 3 (height, depth);
 //   bit 7 = 1: LoadExternalConeMap, channel = (bits 0-2) % 5 - 1 (-1 = all four, 0..3),
@@ -10,9 +11,8 @@
 // The rest is written to a temporary file and loaded. A reliefsim::Error is the normal
 // answer to bad input; anything else that escapes (std::bad_alloc, ...) or a crash or
 // sanitizer report is a finding.
-#include <unistd.h>
-
 #include <OpenImageIO/imageio.h>
+#include <unistd.h>
 
 #include <cstddef>
 #include <cstdint>
@@ -26,10 +26,12 @@
 
 namespace {
 
-constexpr const char* kExtensions[] = {".png", ".tga", ".tif", ".exr", ".jpg", ".hdr", ".bmp", ""};
+constexpr const char* kExtensions[] = {".png", ".tga", ".tif", ".exr",
+                                       ".jpg", ".hdr", ".bmp", ""};
 constexpr size_t kExtensionCount = sizeof(kExtensions) / sizeof(kExtensions[0]);
 
-/// One file name per process (libFuzzer -fork/-jobs runs several), removed after each input.
+/// One file name per process (libFuzzer -fork/-jobs runs several), removed after each
+/// input.
 std::string TempPath(const char* extension) {
     static const std::string base = [] {
         const char* dir = std::getenv("TMPDIR");
@@ -50,9 +52,10 @@ int Init() {
     // One thread: the fuzzer measures one input at a time and reports stay readable.
     OIIO::attribute("threads", 1);
     OIIO::attribute("exr_threads", 1);
-    // The loaders refuse images whose decode would not fit (core/memory.h); tell them about
-    // the fuzzer's own allocation limit (-malloc_limit_mb=2048), which the kernel cannot see,
-    // so a small file claiming a 16384x16384 image is refused, not decoded into 1 GiB.
+    // The loaders refuse images whose decode would not fit (core/memory.h); tell them
+    // about the fuzzer's own allocation limit (-malloc_limit_mb=2048), which the kernel
+    // cannot see, so a small file claiming a 16384x16384 image is refused, not decoded
+    // into 1 GiB.
     setenv("RELIEFSIM_MEMORY_LIMIT", "512M", 0);
     return 0;
 }
@@ -72,11 +75,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     try {
         if (opts & 0x80) {
             const int channel = int(opts & 7) % 5 - 1;
-            const auto kind = (opts & 8) ? reliefsim::ConeKind::Quad : reliefsim::ConeKind::Cone;
+            const auto kind =
+                (opts & 8) ? reliefsim::ConeKind::Quad : reliefsim::ConeKind::Cone;
             const int expect = (opts & 16) ? 4 : 0;
             const reliefsim::ConeMap m =
                 reliefsim::LoadExternalConeMap(path, kind, channel, expect, expect);
-            if (m.values.size() != size_t(m.width) * size_t(m.height) * size_t(m.channels))
+            if (m.values.size() !=
+                size_t(m.width) * size_t(m.height) * size_t(m.channels))
                 std::abort();  // the map does not hold what it says
         } else {
             constexpr reliefsim::Channel kChannels[] = {

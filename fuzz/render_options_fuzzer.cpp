@@ -1,21 +1,22 @@
-// Fuzz harness: the command-line options of `reliefsim render` (app/render_options.h), parsed
-// by CLI11 the way app/cmd_render.cpp declares them and then resolved and validated by
-// ResolveRenderSettings; a builtin:NAME[:SIZE] map of at most 256 texels a side is also
-// loaded (LoadMapFromOptions), so the map spec and --map-channel/--map-stores are checked.
-// Files are never opened: the input chooses the path.
+// Fuzz harness: the command-line options of `reliefsim render` (app/render_options.h),
+// parsed by CLI11 the way app/cmd_render.cpp declares them and then resolved and
+// validated by ResolveRenderSettings; a builtin:NAME[:SIZE] map of at most 256 texels a
+// side is also loaded (LoadMapFromOptions), so the map spec and
+// --map-channel/--map-stores are checked. Files are never opened: the input chooses the
+// path.
 //
-// Input: lines ('\n'), the arguments after `reliefsim render`, one per line (e.g. "--size",
-// "512x512"). The subcommand's callback does only the parsing and validation above, no
-// rendering. reliefsim::Error and CLI::ParseError (including --help) are the normal answers
-// to bad input; anything else that escapes, a crash or a sanitizer report is a finding.
+// Input: lines ('\n'), the arguments after `reliefsim render`, one per line (e.g.
+// "--size", "512x512"). The subcommand's callback does only the parsing and validation
+// above, no rendering. reliefsim::Error and CLI::ParseError (including --help) are the
+// normal answers to bad input; anything else that escapes, a crash or a sanitizer report
+// is a finding.
+#include <CLI/CLI.hpp>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <CLI/CLI.hpp>
 
 #include "app/commands.h"
 #include "app/render_options.h"
@@ -70,7 +71,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         reliefsim::ResolveRenderSettings(options);
         Check(options);
         std::string_view spec = options.map.map;
-        if (spec.rfind("builtin:", 0) == 0 && spec.size() <= 64 && SmallBuiltinSpec(spec)) {
+        if (spec.rfind("builtin:", 0) == 0 && spec.size() <= 64 &&
+            SmallBuiltinSpec(spec)) {
             const reliefsim::HeightField hf = reliefsim::LoadMapFromOptions(options.map);
             if (hf.Empty() || hf.depth.size() != size_t(hf.width) * size_t(hf.height))
                 std::abort();

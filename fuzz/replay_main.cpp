@@ -1,5 +1,6 @@
 // Replays files through a fuzz harness's LLVMFuzzerTestOneInput, without libFuzzer: the
-// regression test of the seed corpus (ctest fuzz_replay_<harness>), built with any compiler.
+// regression test of the seed corpus (ctest fuzz_replay_<harness>), built with any
+// compiler.
 //   fuzz_replay_<harness> FILE|DIR...   (a directory: every regular file in it, sorted)
 // Exits 0 when every input returned; a crash or sanitizer report fails the test.
 #include <algorithm>
@@ -39,13 +40,15 @@ int main(int argc, char** argv) {
     }
     for (const fs::path& f : files) {
         std::ifstream in(f, std::ios::binary);
-        std::vector<char> bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+        std::vector<char> bytes{std::istreambuf_iterator<char>(in),
+                                std::istreambuf_iterator<char>()};
         if (!in.eof() && in.fail()) {
             std::fprintf(stderr, "%s: cannot read %s\n", argv[0], f.c_str());
             return 2;
         }
         std::fprintf(stderr, "replay %s (%zu bytes)\n", f.c_str(), bytes.size());
-        // A copy of exactly the input's size, so that reads past its end are caught by ASan.
+        // A copy of exactly the input's size, so that reads past its end are caught by
+        // ASan.
         std::vector<uint8_t> data(bytes.begin(), bytes.end());
         LLVMFuzzerTestOneInput(data.empty() ? nullptr : data.data(), data.size());
     }

@@ -1,9 +1,9 @@
 // Fuzz harness: the `--set key=value` parser, kernels/registry.h ResolveParams.
 //
-// Input: lines ('\n'). The first line is the method name (FindMethod), every further line one
-// "key=value" setting. A reliefsim::Error is the normal answer to bad input. On success every
-// parameter of the method must have a value inside its declared range (integers integral),
-// and MakeKernel must accept the values. Anything else is a finding.
+// Input: lines ('\n'). The first line is the method name (FindMethod), every further line
+// one "key=value" setting. A reliefsim::Error is the normal answer to bad input. On
+// success every parameter of the method must have a value inside its declared range
+// (integers integral), and MakeKernel must accept the values. Anything else is a finding.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -28,7 +28,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             auto it = values.find(p.name);
             if (it == values.end()) std::abort();  // a parameter without a value
             const double v = it->second;
-            if (!(v >= p.minValue && v <= p.maxValue)) std::abort();  // out of range (or NaN)
+            if (!(v >= p.minValue && v <= p.maxValue))
+                std::abort();  // out of range (or NaN)
             if (p.integer && v != std::floor(v)) std::abort();
         }
         (void)reliefsim::MakeKernel(method, values);

@@ -1,4 +1,5 @@
-// The Mesa/EGL reference runner: EGL surfaceless context, shader assembly, targets, read-back.
+// The Mesa/EGL reference runner: EGL surfaceless context, shader assembly, targets,
+// read-back.
 #include "glref/gl_reference.h"
 
 #define GL_GLEXT_PROTOTYPES 1
@@ -32,11 +33,15 @@ extern const int kEmbeddedGlslCount;
 
 std::string_view EmbeddedGlsl(std::string_view name) {
     for (int i = 0; i < detail::kEmbeddedGlslCount; ++i)
-        if (detail::kEmbeddedGlsl[i].first == name) return detail::kEmbeddedGlsl[i].second;
-    throw Error("embedded GLSL \"" + std::string(name) + "\": not found (a build problem)");
+        if (detail::kEmbeddedGlsl[i].first == name)
+            return detail::kEmbeddedGlsl[i].second;
+    throw Error("embedded GLSL \"" + std::string(name) +
+                "\": not found (a build problem)");
 }
 
-std::string_view ToString(TextureFormat f) { return f == TextureFormat::R8 ? "r8" : "r32f"; }
+std::string_view ToString(TextureFormat f) {
+    return f == TextureFormat::R8 ? "r8" : "r32f";
+}
 std::optional<TextureFormat> ParseTextureFormat(std::string_view s) {
     if (s == "r32f") return TextureFormat::R32F;
     if (s == "r8") return TextureFormat::R8;
@@ -46,7 +51,8 @@ std::optional<TextureFormat> ParseTextureFormat(std::string_view s) {
 namespace {
 
 constexpr const char* kInstallHint =
-    "(install Mesa's EGL and llvmpipe: apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri)";
+    "(install Mesa's EGL and llvmpipe: apt-get install libegl1 libegl-mesa0 "
+    "libgl1-mesa-dri)";
 
 std::string EglErrorText() {
     std::ostringstream s;
@@ -58,7 +64,8 @@ bool HasExtension(const char* name) {
     GLint n = 0;
     glGetIntegerv(GL_NUM_EXTENSIONS, &n);
     for (GLint i = 0; i < n; ++i) {
-        const char* e = reinterpret_cast<const char*>(glGetStringi(GL_EXTENSIONS, GLuint(i)));
+        const char* e =
+            reinterpret_cast<const char*>(glGetStringi(GL_EXTENSIONS, GLuint(i)));
         if (e && std::strcmp(e, name) == 0) return true;
     }
     return false;
@@ -155,14 +162,20 @@ GlReference::GlReference(int lpThreads) : impl_(std::make_unique<Impl>()) {
     if (!getPlatformDisplay)
         throw Error(std::string("EGL: eglGetPlatformDisplayEXT missing ") + kInstallHint);
     Impl& m = *impl_;
-    m.display = getPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+    m.display =
+        getPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
     EGLint major = 0, minor = 0;
     if (m.display == EGL_NO_DISPLAY || !eglInitialize(m.display, &major, &minor))
-        throw Error("EGL: no surfaceless display (" + EglErrorText() + ") " + kInstallHint);
+        throw Error("EGL: no surfaceless display (" + EglErrorText() + ") " +
+                    kInstallHint);
     if (!eglBindAPI(EGL_OPENGL_API)) throw Error("EGL: desktop OpenGL API unavailable");
-    const EGLint attribs[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
+    const EGLint attribs[] = {EGL_CONTEXT_MAJOR_VERSION,
+                              4,
+                              EGL_CONTEXT_MINOR_VERSION,
+                              5,
                               EGL_CONTEXT_OPENGL_PROFILE_MASK,
-                              EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
+                              EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                              EGL_NONE};
     m.context = eglCreateContext(m.display, EGLConfig(nullptr), EGL_NO_CONTEXT, attribs);
     if (m.context == EGL_NO_CONTEXT) {
         eglTerminate(m.display);
@@ -172,7 +185,8 @@ GlReference::GlReference(int lpThreads) : impl_(std::make_unique<Impl>()) {
     if (!eglMakeCurrent(m.display, EGL_NO_SURFACE, EGL_NO_SURFACE, m.context)) {
         eglDestroyContext(m.display, m.context);
         eglTerminate(m.display);
-        throw Error("EGL: eglMakeCurrent without a surface failed (" + EglErrorText() + ")");
+        throw Error("EGL: eglMakeCurrent without a surface failed (" + EglErrorText() +
+                    ")");
     }
     const char* r = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
     m.renderer = r ? r : "";
@@ -185,7 +199,7 @@ GlReference::GlReference(int lpThreads) : impl_(std::make_unique<Impl>()) {
                     "GALLIUM_DRIVER / set LIBGL_ALWAYS_SOFTWARE=1)");
     }
     m.hasBallot = HasExtension("GL_ARB_shader_ballot") &&
-                  
+
                   HasExtension("GL_ARB_gpu_shader_int64");
 }
 
@@ -203,15 +217,17 @@ const std::string& GlReference::FragmentSource() const { return impl_->fragmentS
 void GlReference::Prepare(const HeightField& field, const GlScene& scene) {
     Impl& m = *impl_;
     if (field.Empty()) throw Error("height field \"" + field.name + "\": empty");
-    if (scene.width < 1 || scene.height < 1 || scene.width > 16384 || scene.height > 16384)
+    if (scene.width < 1 || scene.height < 1 || scene.width > 16384 ||
+        scene.height > 16384)
         throw Error("GL frame size " + std::to_string(scene.width) + "x" +
                     std::to_string(scene.height) + ": each side must be in [1, 16384]");
     if (scene.format == TextureFormat::R8 && field.depth8.size() != field.depth.size())
         throw Error("height field \"" + field.name +
                     "\": has no 8-bit depths; quantise it for --texture-format r8");
     if (scene.format == TextureFormat::R8 && scene.sampler.filter == Filter::Min4)
-        throw Error("--filter min4 with --texture-format r8: not compared (llvmpipe's 8-bit "
-                    "AoS path with a min reduction is not modelled); use r32f");
+        throw Error(
+            "--filter min4 with --texture-format r8: not compared (llvmpipe's 8-bit "
+            "AoS path with a min reduction is not modelled); use r32f");
     if (!std::holds_alternative<LinearSearchKernel>(scene.kernel))
         throw Error("GL reference: this kernel has no GLSL twin yet");
     m.ReleaseScene();
@@ -224,18 +240,21 @@ void GlReference::Prepare(const HeightField& field, const GlScene& scene) {
     // Shader assembly: version, extensions, defines, then the twins in dependency order.
     std::string fs = "#version 450 core\n";
     if (m.measureLanes)
-        fs += "#extension GL_ARB_shader_ballot : require\n"
-              
-              "#extension GL_ARB_gpu_shader_int64 : require\n"
-              "#define RS_MEASURE_LANES 1\n";
+        fs +=
+            "#extension GL_ARB_shader_ballot : require\n"
+
+            "#extension GL_ARB_gpu_shader_int64 : require\n"
+            "#define RS_MEASURE_LANES 1\n";
     if (m.tracing) fs += "#define RS_TRACE 1\n";
     fs += "// ---- view_ray.glsl\n" + std::string(EmbeddedGlsl("view_ray.glsl"));
     fs += "// ---- sampler.glsl\n" + std::string(EmbeddedGlsl("sampler.glsl"));
     if (m.measureLanes)
         fs += "// ---- lane_probe.glsl\n" + std::string(EmbeddedGlsl("lane_probe.glsl"));
     if (m.tracing)
-        fs += "// ---- trace_probe.glsl\n" + std::string(EmbeddedGlsl("trace_probe.glsl"));
-    fs += "// ---- linear_search.glsl\n" + std::string(EmbeddedGlsl("linear_search.glsl"));
+        fs +=
+            "// ---- trace_probe.glsl\n" + std::string(EmbeddedGlsl("trace_probe.glsl"));
+    fs +=
+        "// ---- linear_search.glsl\n" + std::string(EmbeddedGlsl("linear_search.glsl"));
     fs += "// ---- record_main.glsl\n" + std::string(EmbeddedGlsl("record_main.glsl"));
     m.fragmentSource = fs;
     const std::string vs =
@@ -297,11 +316,12 @@ void GlReference::Prepare(const HeightField& field, const GlScene& scene) {
                         GL_UNSIGNED_BYTE, field.depth8.data());
     } else {
         glTexStorage2D(GL_TEXTURE_2D, 1, GL_R32F, field.width, field.height);
-        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, field.width, field.height, GL_RED, GL_FLOAT,
-                        field.depth.data());
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, field.width, field.height, GL_RED,
+                        GL_FLOAT, field.depth.data());
     }
     const GLint filter = scene.sampler.filter == Filter::Nearest ? GL_NEAREST : GL_LINEAR;
-    const GLint wrap = scene.sampler.wrap == WrapMode::Clamp ? GL_CLAMP_TO_EDGE : GL_REPEAT;
+    const GLint wrap =
+        scene.sampler.wrap == WrapMode::Clamp ? GL_CLAMP_TO_EDGE : GL_REPEAT;
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, filter);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, filter);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrap);
@@ -311,16 +331,16 @@ void GlReference::Prepare(const HeightField& field, const GlScene& scene) {
     if (scene.sampler.filter == Filter::Min4)
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_REDUCTION_MODE_ARB, GL_MIN);
 
-    // Targets: two RGBA32F colour attachments, no depth buffer (the plane's two triangles do
-    // not overlap, so the C++ depth test removes nothing).
+    // Targets: two RGBA32F colour attachments, no depth buffer (the plane's two triangles
+    // do not overlap, so the C++ depth test removes nothing).
     glGenFramebuffers(1, &m.fbo);
     glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
     glGenTextures(2, m.targets);
     for (int k = 0; k < 2; ++k) {
         glBindTexture(GL_TEXTURE_2D, m.targets[k]);
         glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA32F, scene.width, scene.height);
-        glFramebufferTexture2D(GL_FRAMEBUFFER, GLenum(GL_COLOR_ATTACHMENT0 + k), GL_TEXTURE_2D,
-                               m.targets[k], 0);
+        glFramebufferTexture2D(GL_FRAMEBUFFER, GLenum(GL_COLOR_ATTACHMENT0 + k),
+                               GL_TEXTURE_2D, m.targets[k], 0);
     }
     const GLenum bufs[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
     glDrawBuffers(2, bufs);
@@ -380,9 +400,8 @@ void GlReference::DrawAndFinish() {
     glClearBufferfv(GL_COLOR, 1, zero);
     if (m.measureLanes) {
         const LaneMeasurement& l = m.lanesTemplate;
-        std::vector<uint32_t> init(4 + size_t(l.blocksX) * size_t(l.blocksY) *
-                                           size_t(l.nTriangles),
-                                   0u);
+        std::vector<uint32_t> init(
+            4 + size_t(l.blocksX) * size_t(l.blocksY) * size_t(l.nTriangles), 0u);
         glBindBuffer(GL_SHADER_STORAGE_BUFFER, m.ssbo);
         glBufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(init.size() * sizeof(uint32_t)),
                      init.data(), GL_DYNAMIC_READ);
@@ -452,13 +471,14 @@ GlFrame GlReference::ReadBack() {
     if (m.tracing) {
         std::vector<float> buf(4 + 4 * size_t(Impl::kTraceCapacity));
         glBindBuffer(GL_SHADER_STORAGE_BUFFER, m.traceBuffer);
-        glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(buf.size() * sizeof(float)),
-                           buf.data());
+        glGetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0,
+                           GLsizeiptr(buf.size() * sizeof(float)), buf.data());
         uint32_t count = 0;
         std::memcpy(&count, buf.data(), sizeof count);
         count = std::min<uint32_t>(count, Impl::kTraceCapacity);
         for (uint32_t k = 0; k < count; ++k)
-            g.trace.emplace_back(buf[4 + 4 * k], buf[5 + 4 * k], buf[6 + 4 * k], buf[7 + 4 * k]);
+            g.trace.emplace_back(buf[4 + 4 * k], buf[5 + 4 * k], buf[6 + 4 * k],
+                                 buf[7 + 4 * k]);
     }
     return g;
 }

@@ -1,16 +1,16 @@
-// The Mesa/EGL reference runner: renders a scene with the GLSL twins on llvmpipe (headless
-// EGL, surfaceless) and reads the per-pixel record back (research/llvmpipe.md §1).
+// The Mesa/EGL reference runner: renders a scene with the GLSL twins on llvmpipe
+// (headless EGL, surfaceless) and reads the per-pixel record back (research/llvmpipe.md
+// §1).
 #pragma once
 
 #include <cstdint>
+#include <glm/mat4x4.hpp>
+#include <glm/vec4.hpp>
 #include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
-
-#include <glm/mat4x4.hpp>
-#include <glm/vec4.hpp>
 
 #include "core/record.h"
 #include "kernels/registry.h"
@@ -24,40 +24,46 @@ namespace reliefsim {
 /// Format of the height texture on the GL side.
 enum class TextureFormat {
     R32F,  ///< float depths: llvmpipe's float path (matches Precision::Float)
-    R8,    ///< 8-bit unorm depth8: llvmpipe's fixed-point AoS path (matches Precision::Llvmpipe8)
+    R8,    ///< 8-bit unorm depth8: llvmpipe's fixed-point AoS path (matches
+           ///< Precision::Llvmpipe8)
 };
 std::string_view ToString(TextureFormat f);
 std::optional<TextureFormat> ParseTextureFormat(std::string_view s);  ///< r32f|r8
 
 /// What the GL path renders: the same mesh, camera and uniforms as the C++ frame loop.
 struct GlScene {
-    int width = 0, height = 0;   ///< framebuffer size in pixels
-    ViewUniforms uniforms;       ///< PixelToRay's uniforms (the kernel input of every pixel)
-    glm::mat4 clipFromWorld{1.0f};  ///< camera; vertices are transformed on the CPU with it
-    Mesh mesh;                   ///< only positions and indices are used
-    SamplerState sampler;        ///< filter and wrap (precision follows from `format`)
+    int width = 0, height = 0;  ///< framebuffer size in pixels
+    ViewUniforms uniforms;  ///< PixelToRay's uniforms (the kernel input of every pixel)
+    glm::mat4 clipFromWorld{
+        1.0f};             ///< camera; vertices are transformed on the CPU with it
+    Mesh mesh;             ///< only positions and indices are used
+    SamplerState sampler;  ///< filter and wrap (precision follows from `format`)
     TextureFormat format = TextureFormat::R32F;
-    Kernel kernel;               ///< the configured kernel whose twin runs
-    bool measureLanes = true;    ///< count executed loop trips per lane group (slower)
-    int traceX = -1, traceY = -1;  ///< pixel (row 0 at the top) whose fetches are traced; -1: none
+    Kernel kernel;             ///< the configured kernel whose twin runs
+    bool measureLanes = true;  ///< count executed loop trips per lane group (slower)
+    int traceX = -1,
+        traceY = -1;  ///< pixel (row 0 at the top) whose fetches are traced; -1: none
 };
 
-/// Lane-cost measurement from inside the shader (GL_ARB_shader_ballot): every executed trip
-/// of the kernel's loop is counted once per SIMD group by the group's first active lane.
+/// Lane-cost measurement from inside the shader (GL_ARB_shader_ballot): every executed
+/// trip of the kernel's loop is counted once per SIMD group by the group's first active
+/// lane.
 struct LaneMeasurement {
-    bool available = false;       ///< GL_ARB_shader_ballot present and measurement enabled
-    uint32_t subgroupSize = 0;    ///< gl_SubGroupSizeARB (8 with AVX2)
-    uint64_t groupRuns = 0;       ///< shader invocations of a group (per triangle, per block)
-    uint64_t shapeViolations = 0; ///< lanes whose group was not one 4x2 block of one triangle
-    uint64_t totalTrips = 0;      ///< sum over group runs of executed loop trips
+    bool available = false;     ///< GL_ARB_shader_ballot present and measurement enabled
+    uint32_t subgroupSize = 0;  ///< gl_SubGroupSizeARB (8 with AVX2)
+    uint64_t groupRuns = 0;  ///< shader invocations of a group (per triangle, per block)
+    uint64_t shapeViolations =
+        0;                    ///< lanes whose group was not one 4x2 block of one triangle
+    uint64_t totalTrips = 0;  ///< sum over group runs of executed loop trips
     int blocksX = 0, blocksY = 0, nTriangles = 0;
-    /// trips per (block, triangle): index ((by * blocksX) + bx) * nTriangles + triangle, with
-    /// block (bx, by) = pixels [4bx, 4bx+4) x rows [2by, 2by+2) of OUR image (row 0 at top).
+    /// trips per (block, triangle): index ((by * blocksX) + bx) * nTriangles + triangle,
+    /// with block (bx, by) = pixels [4bx, 4bx+4) x rows [2by, 2by+2) of OUR image (row 0
+    /// at top).
     std::vector<uint32_t> groupTrips;
 };
 
-/// One frame read back from GL. record.nTexelReads is derived from the filter (GL does not
-/// count texels: bilinear and min4 read 4, nearest 1); helper totals stay 0.
+/// One frame read back from GL. record.nTexelReads is derived from the filter (GL does
+/// not count texels: bilinear and min4 read 4, nearest 1); helper totals stay 0.
 struct GlFrame {
     FrameRecord record;
     std::vector<int16_t> triangle;  ///< per pixel: gl_PrimitiveID, -1 where not covered
@@ -66,34 +72,37 @@ struct GlFrame {
     std::vector<glm::vec4> trace;
 };
 
-/// An EGL surfaceless OpenGL 4.5 core context on llvmpipe. Sets LIBGL_ALWAYS_SOFTWARE=1 and
-/// GALLIUM_DRIVER=llvmpipe unless already set, so a machine with a GPU still uses llvmpipe;
-/// lpThreads >= 0 sets LP_NUM_THREADS (read when the first context of the process is made).
-/// Throws Error with a clear message when EGL, the surfaceless platform or a 4.5 core context
-/// is unavailable, or the renderer is not llvmpipe.
+/// An EGL surfaceless OpenGL 4.5 core context on llvmpipe. Sets LIBGL_ALWAYS_SOFTWARE=1
+/// and GALLIUM_DRIVER=llvmpipe unless already set, so a machine with a GPU still uses
+/// llvmpipe; lpThreads >= 0 sets LP_NUM_THREADS (read when the first context of the
+/// process is made). Throws Error with a clear message when EGL, the surfaceless platform
+/// or a 4.5 core context is unavailable, or the renderer is not llvmpipe.
 class GlReference {
-public:
+  public:
     explicit GlReference(int lpThreads = -1);
     ~GlReference();
     GlReference(const GlReference&) = delete;
     GlReference& operator=(const GlReference&) = delete;
 
-    std::string Renderer() const;  ///< GL_RENDERER, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
+    std::string Renderer()
+        const;  ///< GL_RENDERER, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
 
-    /// Uploads the height texture, assembles and links the twin of scene.kernel, creates the
-    /// RGBA32F targets. Validates: R8 needs field.depth8; min4 is only on R32F.
+    /// Uploads the height texture, assembles and links the twin of scene.kernel, creates
+    /// the RGBA32F targets. Validates: R8 needs field.depth8; min4 is only on R32F.
     void Prepare(const HeightField& field, const GlScene& scene);
     /// One draw of the prepared scene followed by glFinish (research/llvmpipe.md §4.1).
     void DrawAndFinish();
-    /// Reads the targets of the last draw back into a GlFrame (rows flipped: row 0 = top).
+    /// Reads the targets of the last draw back into a GlFrame (rows flipped: row 0 =
+    /// top).
     GlFrame ReadBack();
     /// Prepare + DrawAndFinish + ReadBack.
     GlFrame Render(const HeightField& field, const GlScene& scene);
 
-    /// The fragment shader source assembled for the last Prepare (for docs and debugging).
+    /// The fragment shader source assembled for the last Prepare (for docs and
+    /// debugging).
     const std::string& FragmentSource() const;
 
-private:
+  private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };

@@ -1,22 +1,26 @@
 // Linear search (dissertation Alg. 1) followed by a refinement: none, binary (Alg. 2,
-// Policarpo relief mapping), interval (Alg. 3), iterated secant (Risser et al. 2007, listing),
-// or one secant step without a fetch (Tatarchuk's parallax occlusion mapping).
+// Policarpo relief mapping), interval (Alg. 3), iterated secant (Risser et al. 2007,
+// listing), or one secant step without a fetch (Tatarchuk's parallax occlusion mapping).
 //
-// Conventions (DESIGN.md): p(t) = (uvEntry + t * dirUv, t); the ray is inside the relief where
-// t >= depth(uv). Every fetch goes through the sampler and is charged to the FetchBudget.
+// Conventions (DESIGN.md): p(t) = (uvEntry + t * dirUv, t); the ray is inside the relief
+// where t >= depth(uv). Every fetch goes through the sampler and is charged to the
+// FetchBudget.
 //
 // Where the papers are ambiguous, this file decides (docs/kernels.md explains each):
-//  * Alg. 2 as printed flips the sign of s twice when two consecutive points are below the
-//    surface; the step is applied as a magnitude: t -= |s|/2 when below, t += |s|/2 when above
-//    (what Policarpo's shader does).
+//  * Alg. 2 as printed flips the sign of s twice when two consecutive points are below
+//  the
+//    surface; the step is applied as a magnitude: t -= |s|/2 when below, t += |s|/2 when
+//    above (what Policarpo's shader does).
 //  * Alg. 3 as printed assigns a point below the surface to p1, the point "before" the
 //    intersection; here the new point replaces the bracket end on its own side.
 //  * Refinements reuse the two samples the linear search already took around the crossing
 //    (as the POM and secant listings do); only when the linear search found no hit is the
 //    bracket's lower end (t = 1, the bottom) fetched.
-//  * A hit at the very first sample (t = 0) is exact (the surface is at the top there), so no
+//  * A hit at the very first sample (t = 0) is exact (the surface is at the top there),
+//  so no
 //    refinement runs.
-//  * early_exit = false runs every loop for its full count, as a GPU with uniform control flow
+//  * early_exit = false runs every loop for its full count, as a GPU with uniform control
+//  flow
 //    would, with the result latched at the point where the break would have happened.
 #pragma once
 
@@ -32,16 +36,18 @@ enum class Refinement { None, Binary, Interval, Secant, Pom };
 
 struct LinearSearchKernel {
     struct Params {
-        int linearSteps = 32;          ///< coarse steps over t in [0,1]; step = 1/linearSteps
-        int refineSteps = 6;           ///< refinement iterations (ignored by None and Pom)
+        int linearSteps = 32;  ///< coarse steps over t in [0,1]; step = 1/linearSteps
+        int refineSteps = 6;   ///< refinement iterations (ignored by None and Pom)
         Refinement refinement = Refinement::Binary;
-        bool earlyExit = true;         ///< break out of loops (false: GPU-style fixed loops)
-        uint32_t budget = 0;           ///< fetches per fragment, 0 = unlimited
-        float secantTolerance = 0.01f; ///< Risser's |h - z| stop test (listing: 0.01)
+        bool earlyExit = true;  ///< break out of loops (false: GPU-style fixed loops)
+        uint32_t budget = 0;    ///< fetches per fragment, 0 = unlimited
+        float secantTolerance = 0.01f;  ///< Risser's |h - z| stop test (listing: 0.01)
     };
     Params params;
 
-    static glm::vec2 At(const MarchInput& in, float t) { return in.uvEntry + in.dirUv * t; }
+    static glm::vec2 At(const MarchInput& in, float t) {
+        return in.uvEntry + in.dirUv * t;
+    }
 
     template <HeightSampler S>
     MarchResult March(const MarchInput& in, S& heights) const {
@@ -88,16 +94,19 @@ struct LinearSearchKernel {
                     tResult = Binary(in, heights, stepSize, tBelow, budget, r);
                     break;
                 case Refinement::Interval:
-                    tResult = Interval(in, heights, tAbove, hAbove, tBelow, hBelow, budget, r);
+                    tResult =
+                        Interval(in, heights, tAbove, hAbove, tBelow, hBelow, budget, r);
                     break;
                 case Refinement::Secant:
-                    tResult = Secant(in, heights, tAbove, hAbove, tBelow, hBelow, budget, r);
+                    tResult =
+                        Secant(in, heights, tAbove, hAbove, tBelow, hBelow, budget, r);
                     break;
                 case Refinement::Pom:
                     tResult = SecantPoint(tAbove, hAbove, tBelow, hBelow);
                     r.nRefine = 1;
                     break;
-                case Refinement::None: break;
+                case Refinement::None:
+                    break;
             }
         }
         return Finish(r, in, tResult, budget);
@@ -113,7 +122,7 @@ struct LinearSearchKernel {
         return f * (t2 - t1) + t1;
     }
 
-private:
+  private:
     static MarchResult& Finish(MarchResult& r, const MarchInput& in, float t,
                                const FetchBudget& budget) {
         r.uvHit = At(in, t);
@@ -122,7 +131,8 @@ private:
         return r;
     }
 
-    // Alg. 2: bisection of [linearT - stepSize, linearT], returning the last (unsampled) point.
+    // Alg. 2: bisection of [linearT - stepSize, linearT], returning the last (unsampled)
+    // point.
     template <HeightSampler S>
     float Binary(const MarchInput& in, S& heights, float stepSize, float linearT,
                  FetchBudget& budget, MarchResult& r) const {
@@ -151,8 +161,8 @@ private:
 
     // Alg. 3 with a bracket-preserving update; returns the last intersection point.
     template <HeightSampler S>
-    float Interval(const MarchInput& in, S& heights, float t1, float h1, float t2, float h2,
-                   FetchBudget& budget, MarchResult& r) const {
+    float Interval(const MarchInput& in, S& heights, float t1, float h1, float t2,
+                   float h2, FetchBudget& budget, MarchResult& r) const {
         float tInt = t2;
         for (int k = 0; k < params.refineSteps; ++k) {
             tInt = SecantPoint(t1, h1, t2, h2);
@@ -164,7 +174,8 @@ private:
     }
 
     // Risser's listing: iterate the secant point until the sampled depth is within the
-    // tolerance of the ray's depth there; the answer is the ray point at the depth sampled last.
+    // tolerance of the ray's depth there; the answer is the ray point at the depth
+    // sampled last.
     template <HeightSampler S>
     float Secant(const MarchInput& in, S& heights, float t1, float h1, float t2, float h2,
                  FetchBudget& budget, MarchResult& r) const {

@@ -12,15 +12,21 @@ namespace reliefsim {
 namespace {
 
 ParamDef LinearSteps(double def) {
-    return {"linear_steps", def, 1, 1024, true, "linear-search steps over the full depth"};
+    return {"linear_steps", def,  1,
+            1024,           true, "linear-search steps over the full depth"};
 }
 ParamDef RefineSteps(double def, const char* what) {
     return {"refine_steps", def, 0, 64, true, what};
 }
-const ParamDef kEarlyExit = {"early_exit", 1, 0, 1, true,
-                             "1: break out of loops; 0: GPU-style fixed loops (result latched)"};
-const ParamDef kBudget = {"budget", 0, 0, 1000000, true,
-                          "fetch budget per fragment; 0 = none"};
+const ParamDef kEarlyExit = {
+    "early_exit",
+    1,
+    0,
+    1,
+    true,
+    "1: break out of loops; 0: GPU-style fixed loops (result latched)"};
+const ParamDef kBudget = {"budget", 0,    0,
+                          1000000,  true, "fetch budget per fragment; 0 = none"};
 
 std::string FormatNumber(double v) {
     std::ostringstream s;
@@ -32,25 +38,33 @@ std::string FormatNumber(double v) {
 
 const std::vector<MethodInfo>& Methods() {
     static const std::vector<MethodInfo> kMethods = {
-        {"linear", "linear search (steep parallax mapping)",
+        {"linear",
+         "linear search (steep parallax mapping)",
          "Burger 2018 (004) Alg. 1; McGuire 2005",
          {LinearSteps(32), kEarlyExit, kBudget},
          {}},
-        {"relief", "linear search + binary search (relief mapping)",
+        {"relief",
+         "linear search + binary search (relief mapping)",
          "Burger 2018 (004) Alg. 1 + Alg. 2; Policarpo & Oliveira (001)",
          {LinearSteps(32), RefineSteps(6, "binary-search steps"), kEarlyExit, kBudget},
          {}},
-        {"secant", "linear search + iterated secant",
+        {"secant",
+         "linear search + iterated secant",
          "Risser, Shah & Pattanaik 2007 (003) section 3 and listing",
-         {LinearSteps(32), RefineSteps(10, "secant iterations (at most)"),
-          {"secant_tolerance", 0.01, 0, 1, false, "stop when |sampled depth - ray depth| <= this"},
-          kEarlyExit, kBudget},
+         {LinearSteps(32),
+          RefineSteps(10, "secant iterations (at most)"),
+          {"secant_tolerance", 0.01, 0, 1, false,
+           "stop when |sampled depth - ray depth| <= this"},
+          kEarlyExit,
+          kBudget},
          {}},
-        {"interval", "linear search + interval search",
+        {"interval",
+         "linear search + interval search",
          "Burger 2018 (004) Alg. 1 + Alg. 3; Risser et al. interval mapping",
          {LinearSteps(32), RefineSteps(6, "interval-search steps"), kEarlyExit, kBudget},
          {}},
-        {"pom", "linear search + one secant step (parallax occlusion mapping)",
+        {"pom",
+         "linear search + one secant step (parallax occlusion mapping)",
          "Tatarchuk 2006, as described in Risser et al. 2007 (003) section 2",
          {LinearSteps(32), kEarlyExit, kBudget},
          {}},
@@ -62,11 +76,14 @@ const MethodInfo& FindMethod(std::string_view name) {
     for (const auto& m : Methods())
         if (m.name == name) return m;
     std::string valid;
-    for (const auto& m : Methods()) valid += std::string(valid.empty() ? "" : ", ") + m.name;
-    throw Error("--method \"" + std::string(name) + "\": unknown; must be one of: " + valid);
+    for (const auto& m : Methods())
+        valid += std::string(valid.empty() ? "" : ", ") + m.name;
+    throw Error("--method \"" + std::string(name) +
+                "\": unknown; must be one of: " + valid);
 }
 
-ParamValues ResolveParams(const MethodInfo& method, const std::vector<std::string>& settings) {
+ParamValues ResolveParams(const MethodInfo& method,
+                          const std::vector<std::string>& settings) {
     ParamValues values;
     for (const auto& p : method.params) values[p.name] = p.defaultValue;
     for (const auto& s : settings) {
@@ -92,7 +109,8 @@ ParamValues ResolveParams(const MethodInfo& method, const std::vector<std::strin
             throw Error("--set " + key + "=" + text + ": must be an integer");
         if (v < def->minValue || v > def->maxValue)
             throw Error("--set " + key + "=" + text + ": out of range; valid range [" +
-                        FormatNumber(def->minValue) + ", " + FormatNumber(def->maxValue) + "]");
+                        FormatNumber(def->minValue) + ", " + FormatNumber(def->maxValue) +
+                        "]");
         values[key] = v;
     }
     return values;
@@ -109,12 +127,18 @@ Kernel MakeKernel(const MethodInfo& method, const ParamValues& values) {
     k.params.earlyExit = get("early_exit", 1) != 0.0;
     k.params.budget = uint32_t(get("budget", 0));
     k.params.secantTolerance = float(get("secant_tolerance", 0.01));
-    if (method.name == "linear") k.params.refinement = Refinement::None;
-    else if (method.name == "relief") k.params.refinement = Refinement::Binary;
-    else if (method.name == "secant") k.params.refinement = Refinement::Secant;
-    else if (method.name == "interval") k.params.refinement = Refinement::Interval;
-    else if (method.name == "pom") k.params.refinement = Refinement::Pom;
-    else throw Error("--method \"" + method.name + "\": has no kernel yet");
+    if (method.name == "linear")
+        k.params.refinement = Refinement::None;
+    else if (method.name == "relief")
+        k.params.refinement = Refinement::Binary;
+    else if (method.name == "secant")
+        k.params.refinement = Refinement::Secant;
+    else if (method.name == "interval")
+        k.params.refinement = Refinement::Interval;
+    else if (method.name == "pom")
+        k.params.refinement = Refinement::Pom;
+    else
+        throw Error("--method \"" + method.name + "\": has no kernel yet");
     return k;
 }
 

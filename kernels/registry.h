@@ -1,4 +1,5 @@
-// The method registry: name -> kernel, its parameters (defaults, ranges) and the maps it needs.
+// The method registry: name -> kernel, its parameters (defaults, ranges) and the maps it
+// needs.
 #pragma once
 
 #include <map>
@@ -22,9 +23,9 @@ struct ParamDef {
 
 /// One method of the catalogue.
 struct MethodInfo {
-    std::string name;         ///< the --method name
-    std::string title;        ///< one line
-    std::string source;       ///< paper and equation / algorithm numbers
+    std::string name;    ///< the --method name
+    std::string title;   ///< one line
+    std::string source;  ///< paper and equation / algorithm numbers
     std::vector<ParamDef> params;
     std::vector<std::string> maps;  ///< derived maps it needs besides the height map
 };
@@ -39,8 +40,10 @@ const MethodInfo& FindMethod(std::string_view name);
 using ParamValues = std::map<std::string, double>;
 
 /// Validates "key=value" settings against the method (unknown key, not a number, not an
-/// integer, out of range: one Error naming the culprit and the valid set) and fills defaults.
-ParamValues ResolveParams(const MethodInfo& method, const std::vector<std::string>& settings);
+/// integer, out of range: one Error naming the culprit and the valid set) and fills
+/// defaults.
+ParamValues ResolveParams(const MethodInfo& method,
+                          const std::vector<std::string>& settings);
 
 /// A configured kernel. Dispatch happens once per frame or tile via std::visit.
 using Kernel = std::variant<LinearSearchKernel>;

@@ -10,20 +10,21 @@
 namespace reliefsim {
 
 /// Camera and plane uniforms, in float as a shader receives them. The plane is the world
-/// square [-0.5,0.5]^2 at z = 0 with uv = ((x + 0.5) * tiling, (0.5 - y) * tiling), so texel
-/// row 0 (the image's top row) lies on the far edge (+y) for azimuth 0.
+/// square [-0.5,0.5]^2 at z = 0 with uv = ((x + 0.5) * tiling, (0.5 - y) * tiling), so
+/// texel row 0 (the image's top row) lies on the far edge (+y) for azimuth 0.
 struct ViewUniforms {
-    glm::vec3 eye;      ///< camera position, world
-    glm::vec3 forward;  ///< unit view direction, world
-    glm::vec3 right;    ///< camera right * tan(fovX/2), world
-    glm::vec3 up;       ///< camera up * tan(fovY/2), world
+    glm::vec3 eye;        ///< camera position, world
+    glm::vec3 forward;    ///< unit view direction, world
+    glm::vec3 right;      ///< camera right * tan(fovX/2), world
+    glm::vec3 up;         ///< camera up * tan(fovY/2), world
     float width, height;  ///< framebuffer size in pixels
     float tiling;         ///< uv repeats across the plane
     float depthScale;     ///< relief depth in plane units (depth 1 = depthScale)
 };
 
 /// The kernel input of pixel (px, py), row 0 at the top, sampled at the pixel centre.
-/// Rays that graze the plane are bounded (|view.z| >= 1e-6) so they never produce Inf or NaN.
+/// Rays that graze the plane are bounded (|view.z| >= 1e-6) so they never produce Inf or
+/// NaN.
 inline MarchInput PixelToRay(const ViewUniforms& u, int px, int py) {
     const float fx = float(px) + 0.5f, fy = float(py) + 0.5f;
     const float ndcX = (fx * 2.0f) / u.width - 1.0f;

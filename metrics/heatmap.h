@@ -50,10 +50,10 @@ struct HeatmapScale {
 ///    ("reliefsim:min" and "reliefsim:max" as %.9g text, "reliefsim:colormap",
 ///    "reliefsim:label").
 ///
-/// The file is written to a temporary beside `path` and renamed onto it (core/output_set.h),
-/// so no partial file is left behind. With `outputs`, the file is staged in that set
-/// instead and appears only when the caller commits the set. Throws Error (naming the
-/// path) for bad arguments, an unknown colormap or a failed write.
+/// The file is written to a temporary beside `path` and renamed onto it
+/// (core/output_set.h), so no partial file is left behind. With `outputs`, the file is
+/// staged in that set instead and appears only when the caller commits the set. Throws
+/// Error (naming the path) for bad arguments, an unknown colormap or a failed write.
 void WriteHeatmapPng(const std::string& path, const float* values, const uint8_t* mask,
                      int width, int height, const HeatmapScale& scale,
                      OutputSet* outputs = nullptr);

@@ -14,7 +14,8 @@ uint64_t UlpDistance(float a, float b) {
     auto ordered = [](float f) {
         int32_t i;
         std::memcpy(&i, &f, sizeof i);
-        // Map the sign-magnitude bit pattern onto a monotonic integer line (-0 just below +0).
+        // Map the sign-magnitude bit pattern onto a monotonic integer line (-0 just below
+        // +0).
         return i >= 0 ? int64_t(i) : -int64_t(i & 0x7fffffff) - 1;
     };
     const int64_t d = ordered(a) - ordered(b);
@@ -28,11 +29,12 @@ void Finish(FieldAgreement& f, uint64_t pixels) {
 }
 }  // namespace
 
-RecordComparison CompareRecords(const FrameRecord& cpu, const FrameRecord& gl, int maxListed) {
+RecordComparison CompareRecords(const FrameRecord& cpu, const FrameRecord& gl,
+                                int maxListed) {
     if (cpu.width != gl.width || cpu.height != gl.height)
-        throw Error("record comparison: sizes differ (" + std::to_string(cpu.width) + "x" +
-                    std::to_string(cpu.height) + " vs " + std::to_string(gl.width) + "x" +
-                    std::to_string(gl.height) + ")");
+        throw Error("record comparison: sizes differ (" + std::to_string(cpu.width) +
+                    "x" + std::to_string(cpu.height) + " vs " + std::to_string(gl.width) +
+                    "x" + std::to_string(gl.height) + ")");
     RecordComparison c;
     const size_t n = size_t(cpu.width) * size_t(cpu.height);
     c.diffMap.assign(n, 0.0f);
@@ -51,22 +53,26 @@ RecordComparison CompareRecords(const FrameRecord& cpu, const FrameRecord& gl, i
             }
             ++c.pixels;
             int differing = 0;
-            const bool uvSame = SameBits(cpu.hitU[i], gl.hitU[i]) && SameBits(cpu.hitV[i], gl.hitV[i]);
+            const bool uvSame =
+                SameBits(cpu.hitU[i], gl.hitU[i]) && SameBits(cpu.hitV[i], gl.hitV[i]);
             c.hitUv.identical += uvSame;
             differing += !uvSame;
-            c.hitUv.maxDiff = std::max({c.hitUv.maxDiff, UlpDistance(cpu.hitU[i], gl.hitU[i]),
-                                        UlpDistance(cpu.hitV[i], gl.hitV[i])});
+            c.hitUv.maxDiff =
+                std::max({c.hitUv.maxDiff, UlpDistance(cpu.hitU[i], gl.hitU[i]),
+                          UlpDistance(cpu.hitV[i], gl.hitV[i])});
             const bool depthSame = SameBits(cpu.hitDepth[i], gl.hitDepth[i]);
             c.hitDepth.identical += depthSame;
             differing += !depthSame;
-            c.hitDepth.maxDiff =
-                std::max(c.hitDepth.maxDiff, UlpDistance(cpu.hitDepth[i], gl.hitDepth[i]));
-            const bool itSame = cpu.nCoarse[i] == gl.nCoarse[i] && cpu.nRefine[i] == gl.nRefine[i];
+            c.hitDepth.maxDiff = std::max(c.hitDepth.maxDiff,
+                                          UlpDistance(cpu.hitDepth[i], gl.hitDepth[i]));
+            const bool itSame =
+                cpu.nCoarse[i] == gl.nCoarse[i] && cpu.nRefine[i] == gl.nRefine[i];
             c.iterations.identical += itSame;
             differing += !itSame;
             const int64_t itA = int64_t(cpu.nCoarse[i]) + cpu.nRefine[i];
             const int64_t itB = int64_t(gl.nCoarse[i]) + gl.nRefine[i];
-            c.iterations.maxDiff = std::max(c.iterations.maxDiff, uint64_t(std::abs(itA - itB)));
+            c.iterations.maxDiff =
+                std::max(c.iterations.maxDiff, uint64_t(std::abs(itA - itB)));
             const bool fetchSame = cpu.nFetches[i] == gl.nFetches[i];
             c.fetches.identical += fetchSame;
             differing += !fetchSame;
@@ -88,15 +94,17 @@ RecordComparison CompareRecords(const FrameRecord& cpu, const FrameRecord& gl, i
 }
 
 LaneCostCheck CheckLaneCost(const std::vector<uint32_t>& fetches,
-                            const std::vector<int16_t>& cpuTriangle, int width, int height,
-                            const LaneTrips& lanes, uint64_t summaryLaneFetches) {
+                            const std::vector<int16_t>& cpuTriangle, int width,
+                            int height, const LaneTrips& lanes,
+                            uint64_t summaryLaneFetches) {
     LaneCostCheck c;
     c.summaryLaneFetches = summaryLaneFetches;
-    if (fetches.size() != size_t(width) * size_t(height) || cpuTriangle.size() != fetches.size())
-        throw Error("lane-cost check: per-pixel fetches (" + std::to_string(fetches.size()) +
-                    ") and triangles (" + std::to_string(cpuTriangle.size()) +
-                    ") must both hold " + std::to_string(width) + "x" +
-                    std::to_string(height) + " pixels");
+    if (fetches.size() != size_t(width) * size_t(height) ||
+        cpuTriangle.size() != fetches.size())
+        throw Error("lane-cost check: per-pixel fetches (" +
+                    std::to_string(fetches.size()) + ") and triangles (" +
+                    std::to_string(cpuTriangle.size()) + ") must both hold " +
+                    std::to_string(width) + "x" + std::to_string(height) + " pixels");
     const size_t nGroups = lanes.groupTrips.size();
     std::vector<uint32_t> modelTrips(nGroups, 0);
     std::vector<uint8_t> used(nGroups, 0);
@@ -120,8 +128,8 @@ LaneCostCheck CheckLaneCost(const std::vector<uint32_t>& fetches,
             if (c.firstMismatches.size() < 10) {
                 const int tri = int(g % size_t(lanes.nTriangles));
                 const int block = int(g / size_t(lanes.nTriangles));
-                c.firstMismatches.push_back({block % lanes.blocksX, block / lanes.blocksX, tri,
-                                             modelTrips[g], lanes.groupTrips[g]});
+                c.firstMismatches.push_back({block % lanes.blocksX, block / lanes.blocksX,
+                                             tri, modelTrips[g], lanes.groupTrips[g]});
             }
         }
     }

@@ -9,7 +9,8 @@
 
 namespace reliefsim {
 
-/// Per-frame statistics over covered pixels, reduced serially in pixel order (deterministic).
+/// Per-frame statistics over covered pixels, reduced serially in pixel order
+/// (deterministic).
 struct FrameSummary {
     uint64_t coveredPixels = 0;
     double avgIterations = 0.0;  ///< mean of coarse + refine iterations
@@ -20,7 +21,7 @@ struct FrameSummary {
     uint64_t totalTexelReads = 0;
     uint64_t budgetExhaustedPixels = 0;
     uint64_t noHitPixels = 0;
-    double msePaper = 0.0;    ///< mean of e^2, e = hit depth - depth sampled at the hit uv
+    double msePaper = 0.0;  ///< mean of e^2, e = hit depth - depth sampled at the hit uv
     double sumSqPaper = 0.0;  ///< sum of e^2 (the dissertation reports the sum)
     double maxAbsErrorPaper = 0.0;
     /// llvmpipe cost model (research/llvmpipe.md §3): for each 4x2 pixel block aligned to
@@ -30,8 +31,8 @@ struct FrameSummary {
     uint64_t laneFetches8x4 = 0;
 };
 
-/// Per-pixel error of the dissertation's metric (§4.1): hit depth - depth sampled (with the
-/// same sampler state, uncounted) at the hit uv. Zero for uncovered pixels.
+/// Per-pixel error of the dissertation's metric (§4.1): hit depth - depth sampled (with
+/// the same sampler state, uncounted) at the hit uv. Zero for uncovered pixels.
 float PaperError(const FrameRecord& record, size_t i, const HeightField& field,
                  const SamplerState& state);
 

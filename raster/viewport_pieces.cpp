@@ -8,7 +8,7 @@ namespace reliefsim {
 namespace {
 
 class TriangleIdProgram {
-public:
+  public:
     TriangleIdProgram(std::vector<int16_t>& ids, int width) : ids_(ids), width_(width) {}
     void ShadeQuad(const QuadFragment& q, int /*tileIndex*/) {
         for (int k = 0; k < 4; ++k) {
@@ -18,7 +18,7 @@ public:
         }
     }
 
-private:
+  private:
     std::vector<int16_t>& ids_;
     int width_;
 };
@@ -26,15 +26,16 @@ private:
 }  // namespace
 
 Mesh ClipMeshToViewport(const Mesh& mesh, const glm::mat4& clipFromWorld) {
-    // Side planes in world space: inside iff dot(plane, (p, 1)) >= 0, with plane = k * row3
+    // Side planes in world space: inside iff dot(plane, (p, 1)) >= 0, with plane = k *
+    // row3
     // -+ row0 / row1 of clipFromWorld (x <= k w, x >= -k w, y <= k w, y >= -k w).
     const float k = 1.0f - 1.0f / 4096.0f;
     auto row = [&](int r) {
         return glm::vec4(clipFromWorld[0][r], clipFromWorld[1][r], clipFromWorld[2][r],
                          clipFromWorld[3][r]);
     };
-    const glm::vec4 planes[4] = {k * row(3) - row(0), k * row(3) + row(0), k * row(3) - row(1),
-                                 k * row(3) + row(1)};
+    const glm::vec4 planes[4] = {k * row(3) - row(0), k * row(3) + row(0),
+                                 k * row(3) - row(1), k * row(3) + row(1)};
     Mesh out;
     for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
         std::vector<glm::vec3> poly = {mesh.vertices[mesh.indices[t]].position,
@@ -48,7 +49,8 @@ Mesh ClipMeshToViewport(const Mesh& mesh, const glm::mat4& clipFromWorld) {
                 const float da = pl.x * a.x + pl.y * a.y + pl.z * a.z + pl.w;
                 const float db = pl.x * b.x + pl.y * b.y + pl.z * b.z + pl.w;
                 if (da >= 0.0f) next.push_back(a);
-                if ((da >= 0.0f) != (db >= 0.0f)) next.push_back(a + (b - a) * (da / (da - db)));
+                if ((da >= 0.0f) != (db >= 0.0f))
+                    next.push_back(a + (b - a) * (da / (da - db)));
             }
             poly.swap(next);
             if (poly.size() < 3) break;

@@ -1,16 +1,16 @@
-// Cone maps: names, geometry, offsets, encodings, the bilinear safety pass and statistics.
+// Cone maps: names, geometry, offsets, encodings, the bilinear safety pass and
+// statistics.
 #include "texture/cone_map.h"
-
-#include <array>
-#include <bit>
-#include <cmath>
-#include <numeric>
-#include <sstream>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <array>
+#include <bit>
+#include <cmath>
 #include <nlohmann/json.hpp>
+#include <numeric>
+#include <sstream>
 
 #include "core/error.h"
 #include "texture/cone_map_detail.h"
@@ -65,7 +65,8 @@ std::string ConeKindList() {
 }
 std::string ConeEncodingList() {
     std::string r;
-    for (auto& [v, n] : kEncodings) r += (r.empty() ? "\"" : ", \"") + std::string(n) + "\"";
+    for (auto& [v, n] : kEncodings)
+        r += (r.empty() ? "\"" : ", \"") + std::string(n) + "\"";
     return r;
 }
 
@@ -77,35 +78,48 @@ void ValidateConeMapParams(const ConeMapParams& p) {
         throw Error("--stacked-count " + std::to_string(p.stackedCount) +
                     ": out of range; expected 1..16");
     if (!(p.threshold >= 0.0f && p.threshold <= 1.0f))
-        throw Error("--threshold: must be a depth difference in [0, 1]; 0 searches every texel");
+        throw Error(
+            "--threshold: must be a depth difference in [0, 1]; 0 searches every texel");
     if (p.adaptiveLevels < 0 || p.adaptiveLevels > 12)
-        throw Error("--levels " + std::to_string(p.adaptiveLevels) + ": out of range; expected 0..12");
+        throw Error("--levels " + std::to_string(p.adaptiveLevels) +
+                    ": out of range; expected 0..12");
 }
 
 int ChannelCount(ConeKind k, const ConeMapParams& p) {
     switch (k) {
         case ConeKind::Quad:
-        case ConeKind::Acm4: return 4;
-        case ConeKind::Acm8: return 8;
-        case ConeKind::Stacked: return p.stackedCount;
-        default: return 1;
+        case ConeKind::Acm4:
+            return 4;
+        case ConeKind::Acm8:
+            return 8;
+        case ConeKind::Stacked:
+            return p.stackedCount;
+        default:
+            return 1;
     }
 }
 
 std::vector<std::string> ChannelNames(ConeKind k, const ConeMapParams& p) {
     switch (k) {
-        case ConeKind::Quad: return {"+x", "-x", "+y", "-y"};
-        case ConeKind::Acm4: return {"s0", "s1", "s2", "s3"};
-        case ConeKind::Acm8: return {"s0", "s1", "s2", "s3", "s4", "s5", "s6", "s7"};
+        case ConeKind::Quad:
+            return {"+x", "-x", "+y", "-y"};
+        case ConeKind::Acm4:
+            return {"s0", "s1", "s2", "s3"};
+        case ConeKind::Acm8:
+            return {"s0", "s1", "s2", "s3", "s4", "s5", "s6", "s7"};
         case ConeKind::Stacked: {
             std::vector<std::string> n;
-            for (int i = 0; i < p.stackedCount; ++i) n.push_back("cone" + std::to_string(i));
+            for (int i = 0; i < p.stackedCount; ++i)
+                n.push_back("cone" + std::to_string(i));
             return n;
         }
-        case ConeKind::ConeNormal: return {"nz"};
+        case ConeKind::ConeNormal:
+            return {"nz"};
         case ConeKind::MinMip:
-        case ConeKind::MaxMip: return {"depth"};
-        default: return {"ratio"};
+        case ConeKind::MaxMip:
+            return {"depth"};
+        default:
+            return {"ratio"};
     }
 }
 
@@ -128,11 +142,13 @@ Geometry MakeGeometry(int w, int h) {
 float RoundDownStrict(double r) {
     if (!(r < double(kConeRatioCap))) return kConeRatioCap;
     float f = float(r);
-    // Round down, then one more ulp when the float sits within double rounding of the value:
-    // the stored ratio is then strictly below the exact real ratio (conservative).
-    // The next float toward 0 of a positive finite float is its bit pattern minus one (the
-    // same as std::nextafter(f, 0), without the library call).
-    auto down = [](float x) { return std::bit_cast<float>(std::bit_cast<uint32_t>(x) - 1u); };
+    // Round down, then one more ulp when the float sits within double rounding of the
+    // value: the stored ratio is then strictly below the exact real ratio (conservative).
+    // The next float toward 0 of a positive finite float is its bit pattern minus one
+    // (the same as std::nextafter(f, 0), without the library call).
+    auto down = [](float x) {
+        return std::bit_cast<float>(std::bit_cast<uint32_t>(x) - 1u);
+    };
     if (double(f) > r) f = down(f);  // f > r >= 0, so f > 0
     if (double(f) >= r * (1.0 - 1e-14) && f > 0.0f) f = down(f);
     return f;
@@ -146,9 +162,12 @@ float RatioFromQ(double q, double scale) {
 int SectorCount(ConeKind kind) {
     switch (kind) {
         case ConeKind::Quad:
-        case ConeKind::Acm4: return 4;
-        case ConeKind::Acm8: return 8;
-        default: return 1;
+        case ConeKind::Acm4:
+            return 4;
+        case ConeKind::Acm8:
+            return 8;
+        default:
+            return 1;
     }
 }
 
@@ -162,8 +181,9 @@ uint8_t SectorMask(ConeKind kind, const Geometry& g, int dx, int dy) {
         case ConeKind::Acm4:
         case ConeKind::Acm8: {
             static constexpr int kB4[5][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}, {1, 0}};
-            static constexpr int kB8[9][2] = {{1, 0},  {1, 1},   {0, 1},  {-1, 1}, {-1, 0},
-                                              {-1, -1}, {0, -1}, {1, -1}, {1, 0}};
+            static constexpr int kB8[9][2] = {{1, 0},  {1, 1},  {0, 1},
+                                              {-1, 1}, {-1, 0}, {-1, -1},
+                                              {0, -1}, {1, -1}, {1, 0}};
             const int n = kind == ConeKind::Acm4 ? 4 : 8;
             uint8_t m = 0;
             for (int k = 0; k < n; ++k) {
@@ -175,7 +195,8 @@ uint8_t SectorMask(ConeKind kind, const Geometry& g, int dx, int dy) {
             }
             return m;
         }
-        default: return 1;
+        default:
+            return 1;
     }
 }
 
@@ -194,7 +215,8 @@ TiledOffsets MakeTiledOffsets(const Geometry& g, ConeKind sectors) {
     TiledOffsets to;
     const int nx = (2 * g.halfX + 1 + kTile - 1) / kTile;
     const int ny = (2 * g.halfY + 1 + kTile - 1) / kTile;
-    // Sized once: growing by push_back re-copied the (multi-MB) offset list several times.
+    // Sized once: growing by push_back re-copied the (multi-MB) offset list several
+    // times.
     to.offsets.reserve(size_t(2 * g.halfX + 1) * size_t(2 * g.halfY + 1));
     to.tiles.reserve(size_t(nx) * size_t(ny));
     for (int ty = 0; ty < ny; ++ty)
@@ -216,14 +238,18 @@ TiledOffsets MakeTiledOffsets(const Geometry& g, ConeKind sectors) {
             t.end = int(to.offsets.size());
             if (t.end > t.begin) to.tiles.push_back(t);
         }
-    std::stable_sort(to.tiles.begin(), to.tiles.end(),
-                     [](const OffsetTile& a, const OffsetTile& b) { return a.minS < b.minS; });
-    // Super-tiles: group the (sorted) tiles by 32x32 window, keeping their order in a group.
+    std::stable_sort(
+        to.tiles.begin(), to.tiles.end(),
+        [](const OffsetTile& a, const OffsetTile& b) { return a.minS < b.minS; });
+    // Super-tiles: group the (sorted) tiles by 32x32 window, keeping their order in a
+    // group.
     const int span = kTile * kSuperTile;
     const int sxCount = (2 * g.halfX + 1 + span - 1) / span;
-    std::vector<std::vector<int>> groups(size_t(sxCount) * size_t((2 * g.halfY + 1 + span - 1) / span));
+    std::vector<std::vector<int>> groups(size_t(sxCount) *
+                                         size_t((2 * g.halfY + 1 + span - 1) / span));
     for (size_t t = 0; t < to.tiles.size(); ++t) {
-        const int sx = (to.tiles[t].ox + g.halfX) / span, sy = (to.tiles[t].oy + g.halfY) / span;
+        const int sx = (to.tiles[t].ox + g.halfX) / span,
+                  sy = (to.tiles[t].oy + g.halfY) / span;
         groups[size_t(sy) * size_t(sxCount) + size_t(sx)].push_back(int(t));
     }
     for (size_t gi = 0; gi < groups.size(); ++gi) {
@@ -243,33 +269,39 @@ TiledOffsets MakeTiledOffsets(const Geometry& g, ConeKind sectors) {
         to.supers.push_back(st);
     }
     std::stable_sort(to.supers.begin(), to.supers.end(),
-                     [](const OffsetSuperTile& a, const OffsetSuperTile& b) { return a.minS < b.minS; });
+                     [](const OffsetSuperTile& a, const OffsetSuperTile& b) {
+                         return a.minS < b.minS;
+                     });
     return to;
 }
-
 
 /// Writes into `out` through `rows` (both resized, their storage reused: fresh pages are
 /// expensive on a VM, and the dynamic maps call this every frame).
 template <class T, class Op>
-void WindowReduceInto(const std::vector<T>& v, int W, int H, int C, int k, int step, Op op,
-                      std::vector<T>& rows, std::vector<T>& out) {
+void WindowReduceInto(const std::vector<T>& v, int W, int H, int C, int k, int step,
+                      Op op, std::vector<T>& rows, std::vector<T>& out) {
     const size_t Cs = size_t(C);
-    // One separable pass: along x (dx = 1) or y (dx = 0), k samples `step` apart, wrapped.
+    // One separable pass: along x (dx = 1) or y (dx = 0), k samples `step` apart,
+    // wrapped.
     auto pass = [&](const std::vector<T>& in, std::vector<T>& out, bool alongX) {
-        tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
-            for (int j = r.begin(); j < r.end(); ++j)
-                for (int i = 0; i < W; ++i)
-                    for (size_t c = 0; c < Cs; ++c) {
-                        T m = in[(size_t(j) * size_t(W) + size_t(i)) * Cs + c];
-                        const int n = alongX ? W : H, p0 = alongX ? i : j;
-                        for (int a = 1, p = p0 + step; a < k; ++a, p += step) {
-                            if (p >= n) p = p - n < n ? p - n : Wrap(p, n);  // no modulo mostly
-                            const int x = alongX ? p : i, y = alongX ? j : p;
-                            m = op(m, in[(size_t(y) * size_t(W) + size_t(x)) * Cs + c]);
+        tbb::parallel_for(
+            tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
+                for (int j = r.begin(); j < r.end(); ++j)
+                    for (int i = 0; i < W; ++i)
+                        for (size_t c = 0; c < Cs; ++c) {
+                            T m = in[(size_t(j) * size_t(W) + size_t(i)) * Cs + c];
+                            const int n = alongX ? W : H, p0 = alongX ? i : j;
+                            for (int a = 1, p = p0 + step; a < k; ++a, p += step) {
+                                if (p >= n)
+                                    p = p - n < n ? p - n
+                                                  : Wrap(p, n);  // no modulo mostly
+                                const int x = alongX ? p : i, y = alongX ? j : p;
+                                m = op(m,
+                                       in[(size_t(y) * size_t(W) + size_t(x)) * Cs + c]);
+                            }
+                            out[(size_t(j) * size_t(W) + size_t(i)) * Cs + c] = m;
                         }
-                        out[(size_t(j) * size_t(W) + size_t(i)) * Cs + c] = m;
-                    }
-        });
+            });
     };
     rows.resize(v.size());
     out.resize(v.size());
@@ -278,38 +310,45 @@ void WindowReduceInto(const std::vector<T>& v, int W, int H, int C, int k, int s
 }
 
 template <class T, class Op>
-std::vector<T> WindowReduce(const std::vector<T>& v, int W, int H, int C, int k, int step, Op op) {
+std::vector<T> WindowReduce(const std::vector<T>& v, int W, int H, int C, int k, int step,
+                            Op op) {
     std::vector<T> rows, out;
     WindowReduceInto(v, W, H, C, k, step, op, rows, out);
     return out;
 }
 
 template <class T>
-std::vector<T> WindowMinima(const std::vector<T>& v, int W, int H, int C, int k, int step) {
+std::vector<T> WindowMinima(const std::vector<T>& v, int W, int H, int C, int k,
+                            int step) {
     return WindowReduce(v, W, H, C, k, step, [](T a, T b) { return std::min(a, b); });
 }
 
 std::vector<float> WindowMaxima(const std::vector<float>& v, int W, int H, int k) {
-    return WindowReduce(v, W, H, 1, k, 1, [](float a, float b) { return std::max(a, b); });
+    return WindowReduce(v, W, H, 1, k, 1,
+                        [](float a, float b) { return std::max(a, b); });
 }
 
-template std::vector<float> WindowMinima(const std::vector<float>&, int, int, int, int, int);
-template std::vector<uint16_t> WindowMinima(const std::vector<uint16_t>&, int, int, int, int, int);
+template std::vector<float> WindowMinima(const std::vector<float>&, int, int, int, int,
+                                         int);
+template std::vector<uint16_t> WindowMinima(const std::vector<uint16_t>&, int, int, int,
+                                            int, int);
 
 void MakeSearchWindows(const HeightField& hf, SearchWindows& out) {
     auto mn = [](float a, float b) { return std::min(a, b); };
-    WindowReduceInto(hf.depth, hf.width, hf.height, 1, kTile, 1, mn, out.scratch, out.win8);
+    WindowReduceInto(hf.depth, hf.width, hf.height, 1, kTile, 1, mn, out.scratch,
+                     out.win8);
     WindowReduceInto(out.win8, hf.width, hf.height, 1, kSuperTile, kTile, mn, out.scratch,
                      out.win32);
 }
 
 float CheckedMinDepth(const HeightField& hf) {
     if (hf.width <= 0 || hf.height <= 0)
-        throw Error("height map \"" + hf.name + "\": zero size (" + std::to_string(hf.width) +
-                    "x" + std::to_string(hf.height) + "); expected at least 1x1");
+        throw Error("height map \"" + hf.name + "\": zero size (" +
+                    std::to_string(hf.width) + "x" + std::to_string(hf.height) +
+                    "); expected at least 1x1");
     if (hf.depth.size() != size_t(hf.width) * size_t(hf.height))
-        throw Error("height map \"" + hf.name + "\": has " + std::to_string(hf.depth.size()) +
-                    " depths, expected width*height");
+        throw Error("height map \"" + hf.name + "\": has " +
+                    std::to_string(hf.depth.size()) + " depths, expected width*height");
     ValidateHeightField(hf);
     float m = hf.depth[0];
     for (float d : hf.depth) m = std::min(m, d);
@@ -320,13 +359,16 @@ float CheckedMinDepth(const HeightField& hf) {
 
 float DecodeRatio(uint16_t code, ConeEncoding enc) {
     switch (enc) {
-        case ConeEncoding::U8: return Unorm8ToFloat(uint8_t(code));
+        case ConeEncoding::U8:
+            return Unorm8ToFloat(uint8_t(code));
         case ConeEncoding::U8Sqrt: {
             const float s = Unorm8ToFloat(uint8_t(code));
             return s * s;
         }
-        case ConeEncoding::U16: return float(code) * float(1.0 / 65535.0);
-        default: return float(code);
+        case ConeEncoding::U16:
+            return float(code) * float(1.0 / 65535.0);
+        default:
+            return float(code);
     }
 }
 
@@ -335,19 +377,28 @@ uint16_t EncodeRatio(float ratio, ConeEncoding enc) {
     const float r = std::min(ratio, 1.0f);
     int code = 0, maxCode = enc == ConeEncoding::U16 ? 65535 : 255;
     switch (enc) {
-        case ConeEncoding::U8: code = int(std::floor(double(r) * 255.0)); break;
-        case ConeEncoding::U8Sqrt: code = int(std::floor(std::sqrt(double(r)) * 255.0)); break;
-        case ConeEncoding::U16: code = int(std::floor(double(r) * 65535.0)); break;
-        default: return 0;
+        case ConeEncoding::U8:
+            code = int(std::floor(double(r) * 255.0));
+            break;
+        case ConeEncoding::U8Sqrt:
+            code = int(std::floor(std::sqrt(double(r)) * 255.0));
+            break;
+        case ConeEncoding::U16:
+            code = int(std::floor(double(r) * 65535.0));
+            break;
+        default:
+            return 0;
     }
     code = std::clamp(code, 0, maxCode);
-    // The decoder's float arithmetic may land above the ratio: step down until it does not.
+    // The decoder's float arithmetic may land above the ratio: step down until it does
+    // not.
     while (code > 0 && DecodeRatio(uint16_t(code), enc) > ratio) --code;
     while (code < maxCode && DecodeRatio(uint16_t(code + 1), enc) <= ratio) ++code;
     return uint16_t(code);
 }
 
-ConeMap QuantizeConeMap(const ConeMap& m, ConeEncoding enc, std::vector<uint16_t>* codes) {
+ConeMap QuantizeConeMap(const ConeMap& m, ConeEncoding enc,
+                        std::vector<uint16_t>* codes) {
     ConeMap out = m;
     if (codes) codes->assign(m.values.size(), 0);
     if (enc == ConeEncoding::Float) return out;
@@ -368,8 +419,10 @@ ConeMap BilinearSafetyPass(const ConeMap& m) {
                 float v = m.At(i, j, c);
                 for (int dy = -1; dy <= 1; ++dy)
                     for (int dx = -1; dx <= 1; ++dx)
-                        v = std::min(v, m.At(detail::Wrap(i + dx, W), detail::Wrap(j + dy, H), c));
-                out.values[(size_t(j) * size_t(W) + size_t(i)) * size_t(C) + size_t(c)] = v;
+                        v = std::min(
+                            v, m.At(detail::Wrap(i + dx, W), detail::Wrap(j + dy, H), c));
+                out.values[(size_t(j) * size_t(W) + size_t(i)) * size_t(C) + size_t(c)] =
+                    v;
             }
     return out;
 }
@@ -431,12 +484,14 @@ void FillSinusoidMap(HeightField& hf, int width, int height, float t) {
     hf.depth8.clear();
     hf.depth.resize(size_t(width) * size_t(height));
     constexpr double kTwoPi = 6.283185307179586;
-    // (cycles in u, cycles in v, speed in cycles/s, amplitude): integer cycles keep it periodic.
+    // (cycles in u, cycles in v, speed in cycles/s, amplitude): integer cycles keep it
+    // periodic.
     static constexpr double kWaves[4][4] = {
         {2, 1, 0.5, 0.20}, {-1, 3, 0.8, 0.12}, {4, -2, 1.1, 0.07}, {1, 5, 0.3, 0.05}};
-    // sin(a + b) = sin a cos b + cos a sin b: per-column and per-row tables, no sin per texel.
-    std::vector<double> su(size_t(width) * 4), cu(size_t(width) * 4), sv(size_t(height) * 4),
-        cv(size_t(height) * 4);
+    // sin(a + b) = sin a cos b + cos a sin b: per-column and per-row tables, no sin per
+    // texel.
+    std::vector<double> su(size_t(width) * 4), cu(size_t(width) * 4),
+        sv(size_t(height) * 4), cv(size_t(height) * 4);
     for (int w = 0; w < 4; ++w) {
         for (int i = 0; i < width; ++i) {
             const double a = kTwoPi * kWaves[w][0] * ((i + 0.5) / width);
@@ -444,7 +499,8 @@ void FillSinusoidMap(HeightField& hf, int width, int height, float t) {
             cu[size_t(i) * 4 + size_t(w)] = std::cos(a);
         }
         for (int j = 0; j < height; ++j) {
-            const double b = kTwoPi * (kWaves[w][1] * ((j + 0.5) / height) - kWaves[w][2] * double(t));
+            const double b =
+                kTwoPi * (kWaves[w][1] * ((j + 0.5) / height) - kWaves[w][2] * double(t));
             sv[size_t(j) * 4 + size_t(w)] = kWaves[w][3] * std::sin(b);
             cv[size_t(j) * 4 + size_t(w)] = kWaves[w][3] * std::cos(b);
         }

@@ -1,10 +1,11 @@
-// Cone maps and their relatives (issue #3): conservative, relaxed, n-sector, adaptive, cone-normal
-// and stacked cones, each with a brute-force oracle and a fast generator equal to it bit for bit.
+// Cone maps and their relatives (issue #3): conservative, relaxed, n-sector, adaptive,
+// cone-normal and stacked cones, each with a brute-force oracle and a fast generator
+// equal to it bit for bit.
 #pragma once
 
 #include <cstdint>
-#include <optional>
 #include <functional>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -15,29 +16,33 @@ namespace reliefsim {
 
 class OutputSet;
 
-/// Which derived map. Sector order of the multi-channel kinds is fixed (docs/cone_maps.md):
-///   Quad : +x, -x, +y, -y (QDCSM half planes: channel +x bounds blockers with du > 0, ...)
-///   Acm4 : closed quadrants counter-clockwise from +u: [0°,90°], [90°,180°], [180°,270°], [270°,360°]
-///   Acm8 : closed 45° sectors counter-clockwise from +u
-///   (+u is increasing i, +v increasing j; angles are taken in uv space, so non-square maps
+/// Which derived map. Sector order of the multi-channel kinds is fixed
+/// (docs/cone_maps.md):
+///   Quad : +x, -x, +y, -y (QDCSM half planes: channel +x bounds blockers with du > 0,
+///   ...) Acm4 : closed quadrants counter-clockwise from +u: [0°,90°], [90°,180°],
+///   [180°,270°], [270°,360°] Acm8 : closed 45° sectors counter-clockwise from +u
+///   (+u is increasing i, +v increasing j; angles are taken in uv space, so non-square
+///   maps
 ///    get the right sectors.)
 enum class ConeKind {
-    Cone,          ///< conservative cone ratio (Dummer; 000 §II-A)
-    Relaxed,       ///< relaxed cone, Policarpo & Oliveira Listing 18-1/18-2 (search steps)
+    Cone,     ///< conservative cone ratio (Dummer; 000 §II-A)
+    Relaxed,  ///< relaxed cone, Policarpo & Oliveira Listing 18-1/18-2 (search steps)
     RelaxedExact,  ///< exact relaxed cone of Bán et al. (only limiting texels bound it)
     Quad,          ///< quad-directional cone map, 4 channels
     Acm4,          ///< anisotropic cone map, 4 sectors
     Acm8,          ///< anisotropic cone map, 8 sectors
-    ConeNormal,    ///< n_z of the cone side normal (dissertation ch. 3): r / sqrt(1 + r^2)
-    Stacked,       ///< K conservative cones at apex depths d*(1 - k/K) (dissertation §3.4, method 1)
-    MinMip,        ///< min-height pyramid (stored as depth: per block max depth)
-    MaxMip,        ///< max-height pyramid (stored as depth: per block min depth)
+    ConeNormal,  ///< n_z of the cone side normal (dissertation ch. 3): r / sqrt(1 + r^2)
+    Stacked,     ///< K conservative cones at apex depths d*(1 - k/K) (dissertation §3.4,
+                 ///< method 1)
+    MinMip,      ///< min-height pyramid (stored as depth: per block max depth)
+    MaxMip,      ///< max-height pyramid (stored as depth: per block min depth)
 };
 
-/// How ratios are stored. Every quantised encoding rounds toward smaller ratios (never wider).
+/// How ratios are stored. Every quantised encoding rounds toward smaller ratios (never
+/// wider).
 enum class ConeEncoding {
-    Float,   ///< 32-bit float, unclamped up to kConeRatioCap
-    U8,      ///< ratio clamped to [0,1], code = floor(255 r); decode code/255 (GPU Gems 3)
+    Float,  ///< 32-bit float, unclamped up to kConeRatioCap
+    U8,     ///< ratio clamped to [0,1], code = floor(255 r); decode code/255 (GPU Gems 3)
     U8Sqrt,  ///< sqrt(ratio) clamped to [0,1] in 8 bits (Dummer); decode (code/255)^2
     U16,     ///< ratio clamped to [0,1], code = floor(65535 r); decode code/65535
 };
@@ -50,37 +55,45 @@ std::optional<ConeEncoding> ParseConeEncoding(std::string_view s);
 std::string ConeKindList();
 std::string ConeEncodingList();
 
-/// Ratio stored where no texel of the surface lies above the apex (an unbounded cone). Any
-/// value is conservative there; 1024 spans the texture a thousand times over.
+/// Ratio stored where no texel of the surface lies above the apex (an unbounded cone).
+/// Any value is conservative there; 1024 spans the texture a thousand times over.
 constexpr float kConeRatioCap = 1024.0f;
 
 /// Generation parameters. Defaults follow the papers.
-/// Progress of a long generation: called with the fraction done in (0, 1], from any worker
-/// thread but never concurrently, at most about 100 times per map and with growing fractions.
+/// Progress of a long generation: called with the fraction done in (0, 1], from any
+/// worker thread but never concurrently, at most about 100 times per map and with growing
+/// fractions.
 using ConeMapProgress = std::function<void(double fraction)>;
 
 struct ConeMapParams {
-    int searchSteps = 128;     ///< Relaxed: Listing 18-2 search steps, in [1, 4096]
-    int stackedCount = 4;      ///< Stacked: number of cones K, in [1, 16]
-    bool relaxed = false;      ///< ConeNormal/Stacked: relaxed (Listing 18-2) cones instead of conservative
-    bool adaptive = false;     ///< Quad/Acm4/Acm8/Cone: 000 Algorithm 1 (never wider than exact)
-    float threshold = 0.25f;   ///< adaptive: copy the parent's ratio when its depth range <= this
-    int adaptiveLevels = 3;    ///< adaptive: levels of hierarchy above the finest, in [0, 12]
-    ConeMapProgress progress;  ///< optional; not part of the definition (not in cache keys)
+    int searchSteps = 128;  ///< Relaxed: Listing 18-2 search steps, in [1, 4096]
+    int stackedCount = 4;   ///< Stacked: number of cones K, in [1, 16]
+    bool relaxed = false;   ///< ConeNormal/Stacked: relaxed (Listing 18-2) cones instead
+                            ///< of conservative
+    bool adaptive =
+        false;  ///< Quad/Acm4/Acm8/Cone: 000 Algorithm 1 (never wider than exact)
+    float threshold =
+        0.25f;  ///< adaptive: copy the parent's ratio when its depth range <= this
+    int adaptiveLevels =
+        3;  ///< adaptive: levels of hierarchy above the finest, in [0, 12]
+    ConeMapProgress
+        progress;  ///< optional; not part of the definition (not in cache keys)
 };
 
 /// Throws Error ("--search-steps: ...") for out-of-range parameters.
 void ValidateConeMapParams(const ConeMapParams& p);
 
 /// A derived map: W x H texels with `channels` interleaved floats each.
-/// Ratio = cone radius / cone height, radius in uv and height in depth units (DESIGN.md), so a
-/// map does not depend on the depth scale. Texel (i,j) is at values[(j*W + i)*channels + c].
+/// Ratio = cone radius / cone height, radius in uv and height in depth units (DESIGN.md),
+/// so a map does not depend on the depth scale. Texel (i,j) is at values[(j*W +
+/// i)*channels + c].
 struct ConeMap {
     ConeKind kind = ConeKind::Cone;
     int width = 0, height = 0, channels = 1;
     std::vector<float> values;
     float At(int i, int j, int c = 0) const {
-        return values[(size_t(j) * size_t(width) + size_t(i)) * size_t(channels) + size_t(c)];
+        return values[(size_t(j) * size_t(width) + size_t(i)) * size_t(channels) +
+                      size_t(c)];
     }
 };
 
@@ -90,34 +103,37 @@ int ChannelCount(ConeKind k, const ConeMapParams& p = {});
 std::vector<std::string> ChannelNames(ConeKind k, const ConeMapParams& p = {});
 
 /// Generates a cone-family map (every kind except MinMip/MaxMip) with the fast generator.
-/// Deterministic and bit-identical for any thread count (oneTBB inside). Throws Error on bad
-/// input (empty field, NaN/Inf or out-of-range depths, bad parameters).
-ConeMap GenerateConeMap(const HeightField& hf, ConeKind kind, const ConeMapParams& p = {});
+/// Deterministic and bit-identical for any thread count (oneTBB inside). Throws Error on
+/// bad input (empty field, NaN/Inf or out-of-range depths, bad parameters).
+ConeMap GenerateConeMap(const HeightField& hf, ConeKind kind,
+                        const ConeMapParams& p = {});
 
 /// The brute-force oracle of the same definition (every texel against every other):
 /// Θ(N⁴) (Relaxed: Θ(N⁴·S)). For tests; use at most 128².
 ConeMap GenerateConeMapBruteForce(const HeightField& hf, ConeKind kind,
                                   const ConeMapParams& p = {});
 
-/// The plain ACM search of 000 §II-C (per texel and sector, rings of growing radius with the
-/// current minimum as short circuit). Exact; equal to the brute force. Quad/Acm4/Acm8/Cone.
+/// The plain ACM search of 000 §II-C (per texel and sector, rings of growing radius with
+/// the current minimum as short circuit). Exact; equal to the brute force.
+/// Quad/Acm4/Acm8/Cone.
 ConeMap GenerateSectorMapPlainSearch(const HeightField& hf, ConeKind kind);
 
-/// Adaptive hierarchical preprocessing (000 Algorithm 1) for Cone/Quad/Acm4/Acm8: a min/max
-/// depth pyramid; block ratios are conservative bounds for every texel of the block, so copying
-/// a parent's ratio is always safe; a block whose depth range exceeds `threshold` is searched,
-/// with the parent's ratio as the initial short circuit. Result <= exact ratio, always.
+/// Adaptive hierarchical preprocessing (000 Algorithm 1) for Cone/Quad/Acm4/Acm8: a
+/// min/max depth pyramid; block ratios are conservative bounds for every texel of the
+/// block, so copying a parent's ratio is always safe; a block whose depth range exceeds
+/// `threshold` is searched, with the parent's ratio as the initial short circuit. Result
+/// <= exact ratio, always.
 struct AdaptiveStats {
     int64_t nCopied = 0, nSearched = 0;  ///< texels (all levels) copied / searched
 };
 ConeMap GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float threshold,
                                   int levels = 3, AdaptiveStats* stats = nullptr);
 
-/// Buffers reused across calls (pyramid levels, sorted block offsets, output), so that a map
-/// regenerated every frame (000's water demo) allocates and page-faults nothing after the first
-/// frame. Not thread-safe: one workspace per caller thread.
+/// Buffers reused across calls (pyramid levels, sorted block offsets, output), so that a
+/// map regenerated every frame (000's water demo) allocates and page-faults nothing after
+/// the first frame. Not thread-safe: one workspace per caller thread.
 class AdaptiveWorkspace {
-public:
+  public:
     AdaptiveWorkspace();
     ~AdaptiveWorkspace();
     AdaptiveWorkspace(const AdaptiveWorkspace&) = delete;
@@ -125,30 +141,36 @@ public:
     struct Impl;
     Impl& Get() { return *impl; }
 
-private:
+  private:
     Impl* impl;
 };
 
-/// As above, writing into `out` (its storage is reused when the size matches). Same result.
-void GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float threshold, int levels,
-                               AdaptiveWorkspace& ws, ConeMap& out,
+/// As above, writing into `out` (its storage is reused when the size matches). Same
+/// result.
+void GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float threshold,
+                               int levels, AdaptiveWorkspace& ws, ConeMap& out,
                                AdaptiveStats* stats = nullptr);
 
-/// Encodes to `enc` and decodes back: the ratios a kernel sees. Codes (u8/u16) go to *codes
-/// when given. Never widens: decoded <= input for every value. Float: values unchanged.
-ConeMap QuantizeConeMap(const ConeMap& m, ConeEncoding enc, std::vector<uint16_t>* codes = nullptr);
-/// Decodes one code of enc to the ratio the GPU sees (unorm conversion, float arithmetic).
+/// Encodes to `enc` and decodes back: the ratios a kernel sees. Codes (u8/u16) go to
+/// *codes when given. Never widens: decoded <= input for every value. Float: values
+/// unchanged.
+ConeMap QuantizeConeMap(const ConeMap& m, ConeEncoding enc,
+                        std::vector<uint16_t>* codes = nullptr);
+/// Decodes one code of enc to the ratio the GPU sees (unorm conversion, float
+/// arithmetic).
 float DecodeRatio(uint16_t code, ConeEncoding enc);
 /// Encodes one ratio, rounding toward smaller ratios.
 uint16_t EncodeRatio(float ratio, ConeEncoding enc);
 
 /// The 3x3-minimum "bilinear safety" pass (Bán et al.), wrap-around: each texel gets the
-/// minimum of its 3x3 neighbourhood per channel. Afterwards bilinear sampling anywhere in the
-/// texel's footprint never exceeds the exact ratio of the texels the footprint touches.
+/// minimum of its 3x3 neighbourhood per channel. Afterwards bilinear sampling anywhere in
+/// the texel's footprint never exceeds the exact ratio of the texels the footprint
+/// touches.
 ConeMap BilinearSafetyPass(const ConeMap& m);
 
-/// Statistics of a ratio map (all channels; cap values count as "unbounded" and are left out
-/// of min/mean/max). Histogram: `bins` bins over [0, 1], last bin also holds ratios > 1.
+/// Statistics of a ratio map (all channels; cap values count as "unbounded" and are left
+/// out of min/mean/max). Histogram: `bins` bins over [0, 1], last bin also holds ratios
+/// > 1.
 struct ConeMapStats {
     double minRatio = 0, meanRatio = 0, maxRatio = 0;
     int64_t nValues = 0, nUnbounded = 0;
@@ -158,16 +180,18 @@ ConeMapStats ComputeConeMapStats(const ConeMap& m, int bins = 32);
 /// JSON text of the statistics (plus kind, size, encoding).
 std::string ConeMapStatsJson(const ConeMap& m, const ConeMapStats& s, ConeEncoding enc);
 
-/// Writes the map: ".exr" float (one channel per ratio, names from ChannelNames), ".png" 8-bit
-/// (channels 1..4; Acm8 as two 4-channel halves side by side, as 000 §II-D). Atomic: written to
-/// a temporary beside `path` and renamed (core/output_set.h); with `outputs`, staged in that
-/// set until the caller commits it (a map and its statistics together). Throws Error.
+/// Writes the map: ".exr" float (one channel per ratio, names from ChannelNames), ".png"
+/// 8-bit (channels 1..4; Acm8 as two 4-channel halves side by side, as 000 §II-D).
+/// Atomic: written to a temporary beside `path` and renamed (core/output_set.h); with
+/// `outputs`, staged in that set until the caller commits it (a map and its statistics
+/// together). Throws Error.
 void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc,
                   OutputSet* outputs = nullptr);
 
-/// Loads a cone map made elsewhere (e.g. GPU Gems 3 "*_cone.tga": ratio linear in B, 8 bit).
-/// channel: 0..3 = R,G,B,A; -1 = all four (Quad: R,G,B,A = +x,-x,+y,-y). The size must equal
-/// (expectWidth, expectHeight) when they are > 0. Throws Error naming the file.
+/// Loads a cone map made elsewhere (e.g. GPU Gems 3 "*_cone.tga": ratio linear in B, 8
+/// bit). channel: 0..3 = R,G,B,A; -1 = all four (Quad: R,G,B,A = +x,-x,+y,-y). The size
+/// must equal (expectWidth, expectHeight) when they are > 0. Throws Error naming the
+/// file.
 ConeMap LoadExternalConeMap(const std::string& path, ConeKind kind, int channel,
                             int expectWidth = 0, int expectHeight = 0);
 

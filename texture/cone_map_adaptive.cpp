@@ -1,12 +1,13 @@
-// Adaptive hierarchical ACM preprocessing (000 Algorithm 1) with a guarantee: every block's
-// ratio bounds all texels of the block from below, so copying a parent's ratio never widens.
+// Adaptive hierarchical ACM preprocessing (000 Algorithm 1) with a guarantee: every
+// block's ratio bounds all texels of the block from below, so copying a parent's ratio
+// never widens.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <vector>
-
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include "core/error.h"
 #include "texture/cone_map.h"
@@ -19,9 +20,10 @@ namespace {
 using namespace detail;
 
 struct Level {
-    int nx = 0, ny = 0, size = 1;     ///< blocks, block size in texels
-    std::vector<float> dmin, dmax;    ///< per block: min depth (highest) and max depth (lowest)
-    std::vector<double> q;            ///< per block and sector
+    int nx = 0, ny = 0, size = 1;  ///< blocks, block size in texels
+    std::vector<float> dmin,
+        dmax;               ///< per block: min depth (highest) and max depth (lowest)
+    std::vector<double> q;  ///< per block and sector
 };
 
 struct BlockOffset {
@@ -52,7 +54,7 @@ uint8_t RectMask(ConeKind kind, const Geometry& g, int x0, int x1, int y0, int y
                         SectorMask(kind, g, x0, y1) | SectorMask(kind, g, x1, y1));
     if (kind == ConeKind::Quad) return m;
     // Boundary rays of the sectors (uv directions, as texel directions (bx*W, by*H)).
-    static constexpr int kB8[8][2] = {{1, 0}, {1, 1}, {0, 1}, {-1, 1},
+    static constexpr int kB8[8][2] = {{1, 0},  {1, 1},   {0, 1},  {-1, 1},
                                       {-1, 0}, {-1, -1}, {0, -1}, {1, -1}};
     for (int b = 0; b < 8; ++b) {
         if (n == 4 && (b & 1)) continue;
@@ -66,32 +68,35 @@ uint8_t RectMask(ConeKind kind, const Geometry& g, int x0, int x1, int y0, int y
     return m;
 }
 
-std::vector<BlockOffset> MakeBlockOffsets(const Geometry& g, const Level& L, ConeKind kind) {
+std::vector<BlockOffset> MakeBlockOffsets(const Geometry& g, const Level& L,
+                                          ConeKind kind) {
     std::vector<BlockOffset> v;
     const int s = L.size;
-    // One image more on each side than the nearest ones: with an odd block count the texel
-    // offsets at +-W/2 (both in the exact definition) need their own sector masks.
+    // One image more on each side than the nearest ones: with an odd block count the
+    // texel offsets at +-W/2 (both in the exact definition) need their own sector masks.
     for (int ky = -(L.ny / 2) - 1; ky <= L.ny / 2 + 1; ++ky)
         for (int kx = -(L.nx / 2) - 1; kx <= L.nx / 2 + 1; ++kx) {
             BlockOffset b{kx, ky, 0, 0};
             if (kx == 0 && ky == 0) {
-                b.s = std::min(g.wx, g.wy);  // two distinct texels of one block: >= 1 apart
+                b.s =
+                    std::min(g.wx, g.wy);  // two distinct texels of one block: >= 1 apart
             } else {
                 const int64_t gx = std::max(0, std::abs(kx) * s - (s - 1));
                 const int64_t gy = std::max(0, std::abs(ky) * s - (s - 1));
                 b.s = gx * gx * g.wx + gy * gy * g.wy;
             }
-            b.mask = RectMask(kind, g, kx * s - (s - 1), kx * s + (s - 1), ky * s - (s - 1),
-                              ky * s + (s - 1));
+            b.mask = RectMask(kind, g, kx * s - (s - 1), kx * s + (s - 1),
+                              ky * s - (s - 1), ky * s + (s - 1));
             v.push_back(b);
         }
-    std::stable_sort(v.begin(), v.end(),
-                     [](const BlockOffset& a, const BlockOffset& b) { return a.s < b.s; });
+    std::stable_sort(v.begin(), v.end(), [](const BlockOffset& a, const BlockOffset& b) {
+        return a.s < b.s;
+    });
     return v;
 }
 
-void BlockSearch(const Level& L, const std::vector<BlockOffset>& offs, float dminGlobal, int bi,
-                 int bj, int nS, double* best) {
+void BlockSearch(const Level& L, const std::vector<BlockOffset>& offs, float dminGlobal,
+                 int bi, int bj, int nS, double* best) {
     const size_t a = size_t(bj) * size_t(L.nx) + size_t(bi);
     const float apex = L.dmax[a];
     if (!(apex > dminGlobal)) return;
@@ -99,7 +104,8 @@ void BlockSearch(const Level& L, const std::vector<BlockOffset>& offs, float dmi
     for (int k = 0; k < nS; ++k) mb = std::max(mb, best[k]);
     for (const BlockOffset& o : offs) {
         if (CandidateQ(o.s, apex, dminGlobal) >= mb) break;
-        const size_t b = size_t(Wrap(bj + o.ky, L.ny)) * size_t(L.nx) + size_t(Wrap(bi + o.kx, L.nx));
+        const size_t b =
+            size_t(Wrap(bj + o.ky, L.ny)) * size_t(L.nx) + size_t(Wrap(bi + o.kx, L.nx));
         const float top = L.dmin[b];
         if (!(top < apex)) continue;
         if (LowerSectors(o.mask, CandidateQ(o.s, apex, top), nS, best)) {
@@ -120,17 +126,17 @@ int TrailingZeros(int v) {
 
 }  // namespace
 
-/// Everything the adaptive generator allocates, kept between calls. Offsets depend only on the
-/// size, kind and level, so they are rebuilt only when one of those changes.
+/// Everything the adaptive generator allocates, kept between calls. Offsets depend only
+/// on the size, kind and level, so they are rebuilt only when one of those changes.
 struct AdaptiveWorkspace::Impl {
-    std::vector<Level> levels;                     ///< [1..nL] used; [0] is the field itself
-    std::vector<std::vector<BlockOffset>> offs;    ///< per level
-    std::vector<std::array<int, 4>> offsKey;       ///< (W, H, kind, level) of offs[l]
+    std::vector<Level> levels;  ///< [1..nL] used; [0] is the field itself
+    std::vector<std::vector<BlockOffset>> offs;  ///< per level
+    std::vector<std::array<int, 4>> offsKey;     ///< (W, H, kind, level) of offs[l]
     TiledOffsets tiled;
     std::array<int, 3> tiledKey{-1, -1, -1};
     SearchWindows win;
-    std::vector<float> ratio1;                     ///< level-1 block ratios as floats
-    std::vector<int64_t> nCopied, nSearched;       ///< per row
+    std::vector<float> ratio1;                ///< level-1 block ratios as floats
+    std::vector<int64_t> nCopied, nSearched;  ///< per row
 };
 
 AdaptiveWorkspace::AdaptiveWorkspace() : impl(new Impl) {}
@@ -138,10 +144,11 @@ AdaptiveWorkspace::~AdaptiveWorkspace() { delete impl; }
 
 ConeMap GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float threshold,
                                   int levels, AdaptiveStats* stats) {
-    // Maps up to 512² keep one workspace per thread (tables of a few MB): a fresh one per call
-    // returned its pages to the OS and page-faulted them back every call (5x slower on maps
-    // where every texel is copied), and rebuilt the size-only offset tables. A nested call on
-    // the same thread (TBB work stealing inside our parallel loops) gets a fresh workspace.
+    // Maps up to 512² keep one workspace per thread (tables of a few MB): a fresh one per
+    // call returned its pages to the OS and page-faulted them back every call (5x slower
+    // on maps where every texel is copied), and rebuilt the size-only offset tables. A
+    // nested call on the same thread (TBB work stealing inside our parallel loops) gets a
+    // fresh workspace.
     thread_local AdaptiveWorkspace cached;
     thread_local bool busy = false;
     ConeMap m;
@@ -161,12 +168,15 @@ ConeMap GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float th
     return m;
 }
 
-void GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float threshold, int levels,
-                               AdaptiveWorkspace& workspace, ConeMap& m, AdaptiveStats* stats) {
+void GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float threshold,
+                               int levels, AdaptiveWorkspace& workspace, ConeMap& m,
+                               AdaptiveStats* stats) {
     if (!(kind == ConeKind::Cone || kind == ConeKind::Quad || kind == ConeKind::Acm4 ||
           kind == ConeKind::Acm8))
-        throw Error("--adaptive: applies to kinds \"cone\", \"quad\", \"acm4\", \"acm8\"; got \"" +
-                    std::string(ToString(kind)) + "\"");
+        throw Error(
+            "--adaptive: applies to kinds \"cone\", \"quad\", \"acm4\", \"acm8\"; got "
+            "\"" +
+            std::string(ToString(kind)) + "\"");
     if (!(threshold >= 0.0f && threshold <= 1.0f))
         throw Error("--threshold: must be a depth difference in [0, 1]");
     const float dmin = CheckedMinDepth(hf);
@@ -174,7 +184,8 @@ void GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float thres
     const int nS = SectorCount(kind);
     const int W = hf.width, H = hf.height;
     AdaptiveWorkspace::Impl& ws = workspace.Get();
-    // Blocks must tile the texture evenly (exact gaps and sectors): sizes divisible by 2^l.
+    // Blocks must tile the texture evenly (exact gaps and sectors): sizes divisible by
+    // 2^l.
     const int nL = std::max(0, std::min({levels, TrailingZeros(W), TrailingZeros(H)}));
 
     if (ws.levels.size() < size_t(nL) + 1) ws.levels.resize(size_t(nL) + 1);
@@ -198,7 +209,8 @@ void GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float thres
             for (int i = 0; i < c.nx; ++i) {
                 float mn = 2, mx = -1;
                 for (int d = 0; d < 4; ++d) {
-                    const size_t t = size_t(2 * j + (d >> 1)) * size_t(fnx) + size_t(2 * i + (d & 1));
+                    const size_t t =
+                        size_t(2 * j + (d >> 1)) * size_t(fnx) + size_t(2 * i + (d & 1));
                     mn = std::min(mn, fmin[t]);
                     mx = std::max(mx, fmax[t]);
                 }
@@ -218,20 +230,23 @@ void GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float thres
         }
         const std::vector<BlockOffset>& offs = ws.offs[size_t(l)];
         const Level* parent = l < nL ? &L[size_t(l) + 1] : nullptr;
-        tbb::parallel_for(tbb::blocked_range<int>(0, c.ny), [&](const tbb::blocked_range<int>& r) {
-            for (int j = r.begin(); j < r.end(); ++j)
-                for (int i = 0; i < c.nx; ++i) {
-                    double* best = &c.q[(size_t(j) * size_t(c.nx) + size_t(i)) * size_t(nS)];
-                    if (parent) {
-                        const size_t pb = size_t(j / 2) * size_t(parent->nx) + size_t(i / 2);
-                        std::copy_n(&parent->q[pb * size_t(nS)], nS, best);
-                        if (std::abs(c.dmin[size_t(j) * size_t(c.nx) + size_t(i)] -
-                                     parent->dmin[pb]) <= threshold)
-                            continue;
+        tbb::parallel_for(
+            tbb::blocked_range<int>(0, c.ny), [&](const tbb::blocked_range<int>& r) {
+                for (int j = r.begin(); j < r.end(); ++j)
+                    for (int i = 0; i < c.nx; ++i) {
+                        double* best =
+                            &c.q[(size_t(j) * size_t(c.nx) + size_t(i)) * size_t(nS)];
+                        if (parent) {
+                            const size_t pb =
+                                size_t(j / 2) * size_t(parent->nx) + size_t(i / 2);
+                            std::copy_n(&parent->q[pb * size_t(nS)], nS, best);
+                            if (std::abs(c.dmin[size_t(j) * size_t(c.nx) + size_t(i)] -
+                                         parent->dmin[pb]) <= threshold)
+                                continue;
+                        }
+                        BlockSearch(c, offs, dmin, i, j, nS, best);
                     }
-                    BlockSearch(c, offs, dmin, i, j, nS, best);
-                }
-        });
+            });
     }
     m.kind = kind;
     m.width = W;
@@ -242,9 +257,11 @@ void GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float thres
     // A copied texel stores its parent's ratio: convert each level-1 block once.
     if (parent) {
         ws.ratio1.resize(parent->q.size());
-        for (size_t t = 0; t < parent->q.size(); ++t) ws.ratio1[t] = RatioFromQ(parent->q[t], g.scale);
+        for (size_t t = 0; t < parent->q.size(); ++t)
+            ws.ratio1[t] = RatioFromQ(parent->q[t], g.scale);
     }
-    // Offsets and window minima only when some texel is searched (dynamic maps often copy all).
+    // Offsets and window minima only when some texel is searched (dynamic maps often copy
+    // all).
     bool anySearch = !parent;
     for (int j = 0; j < H && !anySearch; ++j)
         for (int i = 0; i < W; ++i) {
@@ -264,28 +281,31 @@ void GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float thres
     }
     const TiledOffsets& to = ws.tiled;
     const SearchWindows& win = ws.win;
-    tbb::parallel_for(tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& r) {
-        for (int j = r.begin(); j < r.end(); ++j)
-            for (int i = 0; i < W; ++i) {
-                float* out = &m.values[(size_t(j) * size_t(W) + size_t(i)) * size_t(nS)];
-                const float d = hf.At(i, j);
-                double best[kMaxSectors];
-                std::fill(best, best + kMaxSectors, kInfQ);
-                if (parent) {
-                    const size_t pb = size_t(j / 2) * size_t(parent->nx) + size_t(i / 2);
-                    if (std::abs(d - parent->dmin[pb]) <= threshold) {
-                        ++ws.nCopied[size_t(j)];
-                        std::copy_n(&ws.ratio1[pb * size_t(nS)], nS, out);
-                        continue;
+    tbb::parallel_for(
+        tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& r) {
+            for (int j = r.begin(); j < r.end(); ++j)
+                for (int i = 0; i < W; ++i) {
+                    float* out =
+                        &m.values[(size_t(j) * size_t(W) + size_t(i)) * size_t(nS)];
+                    const float d = hf.At(i, j);
+                    double best[kMaxSectors];
+                    std::fill(best, best + kMaxSectors, kInfQ);
+                    if (parent) {
+                        const size_t pb =
+                            size_t(j / 2) * size_t(parent->nx) + size_t(i / 2);
+                        if (std::abs(d - parent->dmin[pb]) <= threshold) {
+                            ++ws.nCopied[size_t(j)];
+                            std::copy_n(&ws.ratio1[pb * size_t(nS)], nS, out);
+                            continue;
+                        }
+                        std::copy_n(&parent->q[pb * size_t(nS)], nS, best);
                     }
-                    std::copy_n(&parent->q[pb * size_t(nS)], nS, best);
+                    ++ws.nSearched[size_t(j)];
+                    TiledSearch(hf, to, win, dmin, i, j, d, nS, best,
+                                [](int, int, const Offset&) { return true; });
+                    for (int k = 0; k < nS; ++k) out[k] = RatioFromQ(best[k], g.scale);
                 }
-                ++ws.nSearched[size_t(j)];
-                TiledSearch(hf, to, win, dmin, i, j, d, nS, best,
-                            [](int, int, const Offset&) { return true; });
-                for (int k = 0; k < nS; ++k) out[k] = RatioFromQ(best[k], g.scale);
-            }
-    });
+        });
     if (stats) {
         stats->nCopied = stats->nSearched = 0;
         for (int j = 0; j < H; ++j) {

@@ -1,5 +1,5 @@
-// Internals shared by the cone-map generators: geometry, exact candidate arithmetic, the tiled
-// pruned search. Not part of the public API.
+// Internals shared by the cone-map generators: geometry, exact candidate arithmetic, the
+// tiled pruned search. Not part of the public API.
 #pragma once
 
 #include <algorithm>
@@ -19,22 +19,27 @@ namespace reliefsim::detail {
 constexpr int kMaxSectors = 8;
 constexpr double kInfQ = std::numeric_limits<double>::infinity();
 
-/// Integer geometry of a W x H texture. The squared uv distance of a texel offset (dx, dy) is
-/// S / scale^2 with S = dx^2 * hq^2 + dy^2 * wq^2 an exact integer (wq = W/g, hq = H/g,
-/// g = gcd(W, H), scale = wq * hq * g); for square maps S = dx^2 + dy^2 and scale = W.
+/// Integer geometry of a W x H texture. The squared uv distance of a texel offset (dx,
+/// dy) is S / scale^2 with S = dx^2 * hq^2 + dy^2 * wq^2 an exact integer (wq = W/g, hq =
+/// H/g, g = gcd(W, H), scale = wq * hq * g); for square maps S = dx^2 + dy^2 and scale =
+/// W.
 struct Geometry {
     int w = 0, h = 0;
     int64_t wx = 1;  ///< weight of dx^2 (hq^2)
     int64_t wy = 1;  ///< weight of dy^2 (wq^2)
     double scale = 1;
-    int halfX = 0, halfY = 0;  ///< offsets run over [-half, half] (both images at W/2 for even W)
-    int64_t S(int dx, int dy) const { return int64_t(dx) * dx * wx + int64_t(dy) * dy * wy; }
+    int halfX = 0,
+        halfY = 0;  ///< offsets run over [-half, half] (both images at W/2 for even W)
+    int64_t S(int dx, int dy) const {
+        return int64_t(dx) * dx * wx + int64_t(dy) * dy * wy;
+    }
 };
 Geometry MakeGeometry(int w, int h);
 
-/// The one candidate formula every exact generator uses: q = S / (a - b)^2 in double, where a is
-/// the apex depth and b the blocker depth (b < a). Both operations round monotonically, so a
-/// bound computed with a smaller b or a smaller S is never larger: the pruning is exact.
+/// The one candidate formula every exact generator uses: q = S / (a - b)^2 in double,
+/// where a is the apex depth and b the blocker depth (b < a). Both operations round
+/// monotonically, so a bound computed with a smaller b or a smaller S is never larger:
+/// the pruning is exact.
 inline double CandidateQ(int64_t s, float apex, float blocker) {
     const double dd = double(apex) - double(blocker);
     return double(s) / (dd * dd);
@@ -65,7 +70,8 @@ constexpr int kTile = 8;
 uint8_t SectorMask(ConeKind kind, const Geometry& g, int dx, int dy);
 int SectorCount(ConeKind kind);
 
-/// 4x4 tiles (a 32x32 window of offsets): superOrder[first, last) lists its tiles by minS.
+/// 4x4 tiles (a 32x32 window of offsets): superOrder[first, last) lists its tiles by
+/// minS.
 struct OffsetSuperTile {
     int first, last;
     int ox, oy;  ///< window origin relative to the apex texel (covers ox..ox+31)
@@ -74,9 +80,9 @@ struct OffsetSuperTile {
 };
 constexpr int kSuperTile = 4;  ///< tiles per super-tile side
 
-/// All offsets of the wrap range (except 0,0) grouped in 8x8 tiles, tiles sorted by minS; the
-/// tiles also grouped by 32x32 window (super-tiles sorted by minS), for searches that mostly
-/// reject whole windows.
+/// All offsets of the wrap range (except 0,0) grouped in 8x8 tiles, tiles sorted by minS;
+/// the tiles also grouped by 32x32 window (super-tiles sorted by minS), for searches that
+/// mostly reject whole windows.
 struct TiledOffsets {
     std::vector<Offset> offsets;
     std::vector<OffsetTile> tiles;
@@ -88,14 +94,16 @@ TiledOffsets MakeTiledOffsets(const Geometry& g, ConeKind sectors);
 std::vector<Offset> MakeOffsets(const Geometry& g, ConeKind sectors);
 
 /// out[(j*W + i)*C + c] = min of v[(y*W + x)*C + c] over x = i + a*step, y = j + b*step,
-/// a, b in [0, k), wrapped (C interleaved channels). With v itself a window minimum of size
-/// `step`, the result is the window minimum of size k*step.
-/// T: float, or the upper 16 bits of non-negative floats (their order is the floats' order).
+/// a, b in [0, k), wrapped (C interleaved channels). With v itself a window minimum of
+/// size `step`, the result is the window minimum of size k*step. T: float, or the upper
+/// 16 bits of non-negative floats (their order is the floats' order).
 template <class T>
-std::vector<T> WindowMinima(const std::vector<T>& v, int W, int H, int C, int k, int step = 1);
-extern template std::vector<float> WindowMinima(const std::vector<float>&, int, int, int, int, int);
-extern template std::vector<uint16_t> WindowMinima(const std::vector<uint16_t>&, int, int, int,
-                                                   int, int);
+std::vector<T> WindowMinima(const std::vector<T>& v, int W, int H, int C, int k,
+                            int step = 1);
+extern template std::vector<float> WindowMinima(const std::vector<float>&, int, int, int,
+                                                int, int);
+extern template std::vector<uint16_t> WindowMinima(const std::vector<uint16_t>&, int, int,
+                                                   int, int, int);
 
 /// The same with max, one channel, step 1.
 std::vector<float> WindowMaxima(const std::vector<float>& v, int W, int H, int k);
@@ -134,8 +142,8 @@ inline bool LowerSectors(uint8_t mask, double q, int nSectors, double* best) {
     return LowerMasked(mask & ((1u << nSectors) - 1u), q, best);
 }
 
-/// One blocker candidate: updates best[k] of the sectors in off.mask when the texel at the
-/// offset is above the apex and accepted; true when a sector improved.
+/// One blocker candidate: updates best[k] of the sectors in off.mask when the texel at
+/// the offset is above the apex and accepted; true when a sector improved.
 template <class Accept>
 RS_INLINE bool ConsiderBlockerAt(const HeightField& hf, const Offset& off, int bx, int by,
                                  float apex, int nSectors, double* best, Accept& accept) {
@@ -147,12 +155,13 @@ RS_INLINE bool ConsiderBlockerAt(const HeightField& hf, const Offset& off, int b
 template <class Accept>
 RS_INLINE bool ConsiderBlocker(const HeightField& hf, const Offset& off, int ti, int tj,
                                float apex, int nSectors, double* best, Accept& accept) {
-    return ConsiderBlockerAt(hf, off, Wrap(ti + off.dx, hf.width), Wrap(tj + off.dy, hf.height),
-                             apex, nSectors, best, accept);
+    return ConsiderBlockerAt(hf, off, Wrap(ti + off.dx, hf.width),
+                             Wrap(tj + off.dy, hf.height), apex, nSectors, best, accept);
 }
 
-/// The tiled exact search for one apex. best[k] holds the running minimum q per sector (seed
-/// with kInfQ or a parent's bound). accept(bx, by, off) filters blockers (e.g. limiting texels).
+/// The tiled exact search for one apex. best[k] holds the running minimum q per sector
+/// (seed with kInfQ or a parent's bound). accept(bx, by, off) filters blockers (e.g.
+/// limiting texels).
 template <class Accept>
 void TiledSearch(const HeightField& hf, const TiledOffsets& to, const SearchWindows& sw,
                  float dmin, int ti, int tj, float apex, int nSectors, double* best,
@@ -174,11 +183,13 @@ void TiledSearch(const HeightField& hf, const TiledOffsets& to, const SearchWind
         if (!(w32 < apex)) continue;
         const double lbSuper = CandidateQ(st.minS, apex, w32);
         bool any = false;
-        for (int k = 0; k < nSectors; ++k) any |= (st.mask >> k & 1u) && lbSuper < best[k];
+        for (int k = 0; k < nSectors; ++k)
+            any |= (st.mask >> k & 1u) && lbSuper < best[k];
         if (!any) continue;
         for (int x = st.first; x < st.last; ++x) {
             const OffsetTile& t = to.tiles[size_t(to.superOrder[size_t(x)])];
-            if (CandidateQ(t.minS, apex, dmin) >= mb) break;  // sorted by minS in the group
+            if (CandidateQ(t.minS, apex, dmin) >= mb)
+                break;  // sorted by minS in the group
             // The tile's window origin, wrapped; its texels are at most W (H) further.
             const int wx = wrapNear(ti + t.ox, W), wy = wrapNear(tj + t.oy, H);
             const float wmin = sw.win8[size_t(wy) * size_t(W) + size_t(wx)];
@@ -195,7 +206,8 @@ void TiledSearch(const HeightField& hf, const TiledOffsets& to, const SearchWind
                 int bx = wx + (off.dx - t.ox), by = wy + (off.dy - t.oy);
                 if (bx >= W) bx -= W;
                 if (by >= H) by -= H;
-                changed |= ConsiderBlockerAt(hf, off, bx, by, apex, nSectors, best, accept);
+                changed |=
+                    ConsiderBlockerAt(hf, off, bx, by, apex, nSectors, best, accept);
             }
             if (changed) mb = maxBest();
         }
@@ -206,11 +218,13 @@ void TiledSearch(const HeightField& hf, const TiledOffsets& to, const SearchWind
 template <class Accept>
 void BruteSearch(const HeightField& hf, const std::vector<Offset>& offs, int ti, int tj,
                  float apex, int nSectors, double* best, Accept&& accept) {
-    for (const Offset& off : offs) ConsiderBlocker(hf, off, ti, tj, apex, nSectors, best, accept);
+    for (const Offset& off : offs)
+        ConsiderBlocker(hf, off, ti, tj, apex, nSectors, best, accept);
 }
 
-/// Bán et al.'s limiting test: the blocker's outward neighbour (one texel further along the
-/// offset direction, rounded to the 8-neighbourhood) is strictly deeper than the blocker.
+/// Bán et al.'s limiting test: the blocker's outward neighbour (one texel further along
+/// the offset direction, rounded to the 8-neighbourhood) is strictly deeper than the
+/// blocker.
 inline bool IsLimiting(const HeightField& hf, int bx, int by, int dx, int dy) {
     const int m = std::max(std::abs(dx), std::abs(dy));
     const int sx = (2 * std::abs(dx) >= m) ? (dx > 0 ? 1 : -1) : 0;
@@ -219,24 +233,27 @@ inline bool IsLimiting(const HeightField& hf, int bx, int by, int dx, int dy) {
     return hf.At(nx, ny) > hf.At(bx, by);
 }
 
-/// Listing 18-2 for one (source, offset) pair in float (GPU) arithmetic, apex depth `apex`
-/// (the source depth for plain relaxed cones); NaN-free: returns +inf for the destinations the
-/// listing ignores (depth 0 gives a NaN ratio there). The brute force's evaluation.
+/// Listing 18-2 for one (source, offset) pair in float (GPU) arithmetic, apex depth
+/// `apex` (the source depth for plain relaxed cones); NaN-free: returns +inf for the
+/// destinations the listing ignores (depth 0 gives a NaN ratio there). The brute force's
+/// evaluation.
 float RelaxedPairRatio(const HeightField& hf, int ti, int tj, int dx, int dy, int steps,
                        float apex);
 
-/// Listing 18-1/18-2 relaxed map (texture/cone_map_relaxed.cpp): outKind Relaxed (ratios),
-/// ConeNormal (n_z of the ratio) or Stacked (p.stackedCount channels, apex StackedApex).
-/// brute = every pair, no pruning (the oracle); otherwise the exact pruned search, which uses
-/// the exit-field bound where its float argument holds (maps up to ~2040 texels a side at 4096
-/// steps, ~58,000 at 128); exitField = false forces the search without it (tests).
+/// Listing 18-1/18-2 relaxed map (texture/cone_map_relaxed.cpp): outKind Relaxed
+/// (ratios), ConeNormal (n_z of the ratio) or Stacked (p.stackedCount channels, apex
+/// StackedApex). brute = every pair, no pruning (the oracle); otherwise the exact pruned
+/// search, which uses the exit-field bound where its float argument holds (maps up to
+/// ~2040 texels a side at 4096 steps, ~58,000 at 128); exitField = false forces the
+/// search without it (tests).
 ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool brute,
                           ConeKind outKind, bool exitField = true);
 
 /// Apex depth of stacked cone k of K: d * (K - k) / K (k = 0: the surface point).
 inline float StackedApex(float d, int k, int K) { return d * (float(K - k) / float(K)); }
 
-/// n_z of the cone side normal from a ratio r: r / sqrt(1 + r^2); 1 for an unbounded cone.
+/// n_z of the cone side normal from a ratio r: r / sqrt(1 + r^2); 1 for an unbounded
+/// cone.
 inline float ConeNormalFromRatio(double r) {
     if (!(r < double(kConeRatioCap))) return 1.0f;
     return RoundDownStrict(r / std::sqrt(1.0 + r * r));
@@ -245,8 +262,9 @@ inline float ConeNormalFromRatio(double r) {
 /// Counts work units done by any thread and reports whole percents to a ConeMapProgress
 /// (serialised, growing). A no-op without a callback.
 class ProgressCounter {
-public:
-    ProgressCounter(const ConeMapProgress& f, int64_t total) : f_(f), total_(std::max<int64_t>(total, 1)) {}
+  public:
+    ProgressCounter(const ConeMapProgress& f, int64_t total)
+        : f_(f), total_(std::max<int64_t>(total, 1)) {}
     void Add(int64_t n) {
         if (!f_) return;
         const int64_t done = done_.fetch_add(n, std::memory_order_relaxed) + n;
@@ -258,7 +276,7 @@ public:
         f_(double(pct) / 100.0);
     }
 
-private:
+  private:
     const ConeMapProgress& f_;
     int64_t total_;
     std::atomic<int64_t> done_{0};
@@ -268,7 +286,7 @@ private:
 
 /// Conservative ratio of every texel by levels + distance transforms (exact; 8-bit or few
 /// distinct depths). Writes q per texel.
-void ConservativeQByLevels(const HeightField& hf, const Geometry& g, std::vector<double>& q,
-                           const ConeMapProgress& progress = {});
+void ConservativeQByLevels(const HeightField& hf, const Geometry& g,
+                           std::vector<double>& q, const ConeMapProgress& progress = {});
 
 }  // namespace reliefsim::detail

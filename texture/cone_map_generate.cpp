@@ -1,11 +1,12 @@
 // Cone-family generators: fast exact versions (levels + distance transforms, tiled pruned
-// searches), their brute-force oracles, the relaxed Listing 18-2 definition and adaptive ACM.
+// searches), their brute-force oracles, the relaxed Listing 18-2 definition and adaptive
+// ACM.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <vector>
-
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include "core/error.h"
 #include "texture/cone_map.h"
@@ -19,9 +20,10 @@ namespace {
 
 template <class F>
 void ForEachRow(int H, F&& f) {
-    tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
-        for (int j = r.begin(); j < r.end(); ++j) f(j);
-    });
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, 1),
+                      [&](const tbb::blocked_range<int>& r) {
+                          for (int j = r.begin(); j < r.end(); ++j) f(j);
+                      });
 }
 
 bool UseLevels(const HeightField& hf) {
@@ -54,13 +56,14 @@ ConeMap MakeMap(const HeightField& hf, ConeKind kind, int channels) {
 }
 
 /// Conservative / sector / relaxed-exact / stacked: q per texel and channel.
-ConeMap SearchMap(const HeightField& hf, ConeKind kind, const ConeMapParams& p, Mode mode) {
+ConeMap SearchMap(const HeightField& hf, ConeKind kind, const ConeMapParams& p,
+                  Mode mode) {
     const float dmin = CheckedMinDepth(hf);
     const Geometry g = MakeGeometry(hf.width, hf.height);
-    const ConeKind sectors = (kind == ConeKind::Quad || kind == ConeKind::Acm4 ||
-                              kind == ConeKind::Acm8)
-                                 ? kind
-                                 : ConeKind::Cone;
+    const ConeKind sectors =
+        (kind == ConeKind::Quad || kind == ConeKind::Acm4 || kind == ConeKind::Acm8)
+            ? kind
+            : ConeKind::Cone;
     const int nS = SectorCount(sectors);
     const int C = kind == ConeKind::Stacked ? p.stackedCount : nS;
     const bool limiting = kind == ConeKind::RelaxedExact;
@@ -74,18 +77,20 @@ ConeMap SearchMap(const HeightField& hf, ConeKind kind, const ConeMapParams& p, 
         ConservativeQByLevels(hf, g, q, p.progress);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, q.size(), size_t(1) << 14),
                           [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t t = r.begin(); t < r.end(); ++t)
-                m.values[t] = kind == ConeKind::ConeNormal
-                                  ? ConeNormalFromRatio(std::sqrt(q[t]) / g.scale)
-                                  : RatioFromQ(q[t], g.scale);
-        });
+                              for (size_t t = r.begin(); t < r.end(); ++t)
+                                  m.values[t] =
+                                      kind == ConeKind::ConeNormal
+                                          ? ConeNormalFromRatio(std::sqrt(q[t]) / g.scale)
+                                          : RatioFromQ(q[t], g.scale);
+                          });
         return m;
     }
 
     TiledOffsets to;
     std::vector<Offset> offs;
     SearchWindows win;
-    if (mode == Mode::Brute) offs = MakeOffsets(g, sectors);
+    if (mode == Mode::Brute)
+        offs = MakeOffsets(g, sectors);
     else {
         to = MakeTiledOffsets(g, sectors);
         MakeSearchWindows(hf, win);
@@ -103,10 +108,13 @@ ConeMap SearchMap(const HeightField& hf, ConeKind kind, const ConeMapParams& p, 
                 const float apex = kind == ConeKind::Stacked ? StackedApex(d, c, C) : d;
                 if (kind != ConeKind::Stacked && c > 0) break;
                 std::fill(best, best + kMaxSectors * 2, kInfQ);
-                if (mode == Mode::Brute) BruteSearch(hf, offs, i, j, apex, nSearch, best, accept);
-                else TiledSearch(hf, to, win, dmin, i, j, apex, nSearch, best, accept);
+                if (mode == Mode::Brute)
+                    BruteSearch(hf, offs, i, j, apex, nSearch, best, accept);
+                else
+                    TiledSearch(hf, to, win, dmin, i, j, apex, nSearch, best, accept);
                 float* out = &m.values[(size_t(j) * size_t(W) + size_t(i)) * size_t(C)];
-                if (kind == ConeKind::Stacked) out[c] = RatioFromQ(best[0], g.scale);
+                if (kind == ConeKind::Stacked)
+                    out[c] = RatioFromQ(best[0], g.scale);
                 else if (kind == ConeKind::ConeNormal)
                     out[0] = ConeNormalFromRatio(std::sqrt(best[0]) / g.scale);
                 else
@@ -124,7 +132,8 @@ ConeMap GenerateConeMapImpl(const HeightField& hf, ConeKind kind, const ConeMapP
                             Mode mode) {
     ValidateConeMapParams(p);
     switch (kind) {
-        case ConeKind::Relaxed: return RelaxedListingMap(hf, p, mode == Mode::Brute, kind);
+        case ConeKind::Relaxed:
+            return RelaxedListingMap(hf, p, mode == Mode::Brute, kind);
         case ConeKind::ConeNormal:
         case ConeKind::Stacked:
             if (p.relaxed) return RelaxedListingMap(hf, p, mode == Mode::Brute, kind);
@@ -132,8 +141,10 @@ ConeMap GenerateConeMapImpl(const HeightField& hf, ConeKind kind, const ConeMapP
         case ConeKind::MinMip:
         case ConeKind::MaxMip:
             throw Error("--kind " + std::string(ToString(kind)) +
-                        ": a mip pyramid, not a cone map; use BuildMipPyramid (texture/mip_pyramid.h)");
-        default: return SearchMap(hf, kind, p, mode);
+                        ": a mip pyramid, not a cone map; use BuildMipPyramid "
+                        "(texture/mip_pyramid.h)");
+        default:
+            return SearchMap(hf, kind, p, mode);
     }
 }
 
@@ -146,7 +157,8 @@ ConeMap GenerateConeMap(const HeightField& hf, ConeKind kind, const ConeMapParam
     return GenerateConeMapImpl(hf, kind, p, Mode::Fast);
 }
 
-ConeMap GenerateConeMapBruteForce(const HeightField& hf, ConeKind kind, const ConeMapParams& p) {
+ConeMap GenerateConeMapBruteForce(const HeightField& hf, ConeKind kind,
+                                  const ConeMapParams& p) {
     return GenerateConeMapImpl(hf, kind, p, Mode::Brute);
 }
 

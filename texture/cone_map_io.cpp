@@ -1,4 +1,5 @@
-// Cone maps on disk: writing .exr/.png atomically, reading maps made elsewhere (GPU Gems 3).
+// Cone maps on disk: writing .exr/.png atomically, reading maps made elsewhere (GPU Gems
+// 3).
 #include <OpenImageIO/imageio.h>
 
 #include <cctype>
@@ -27,7 +28,8 @@ void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc,
                   OutputSet* outputs) {
     const std::string ext = Lower(std::filesystem::path(path).extension().string());
     if (ext != ".exr" && ext != ".png")
-        throw Error("--out \"" + path + "\": unsupported extension; expected .exr (float) or .png (8-bit)");
+        throw Error("--out \"" + path +
+                    "\": unsupported extension; expected .exr (float) or .png (8-bit)");
     // The image writers stage the file (in `outputs`, or on their own), so a failure
     // leaves nothing behind.
     if (ext == ".exr") {
@@ -39,7 +41,8 @@ void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc,
     if (m.channels > 4 && m.channels != 8)
         throw Error("--out \"" + path + "\": " + std::to_string(m.channels) +
                     " channels do not fit a PNG; use .exr");
-    const ConeEncoding e8 = enc == ConeEncoding::U8Sqrt ? ConeEncoding::U8Sqrt : ConeEncoding::U8;
+    const ConeEncoding e8 =
+        enc == ConeEncoding::U8Sqrt ? ConeEncoding::U8Sqrt : ConeEncoding::U8;
     std::vector<uint16_t> codes;
     QuantizeConeMap(m, e8, &codes);
     if (m.channels == 8) {  // two RGBA halves side by side (000 §II-D)
@@ -48,8 +51,10 @@ void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc,
             for (int i = 0; i < m.width; ++i)
                 for (int c = 0; c < 8; ++c) {
                     const int x = i + (c / 4) * m.width;
-                    px[(size_t(j) * size_t(2 * m.width) + size_t(x)) * 4 + size_t(c % 4)] =
-                        uint8_t(codes[(size_t(j) * size_t(m.width) + size_t(i)) * 8 + size_t(c)]);
+                    px[(size_t(j) * size_t(2 * m.width) + size_t(x)) * 4 +
+                       size_t(c % 4)] =
+                        uint8_t(codes[(size_t(j) * size_t(m.width) + size_t(i)) * 8 +
+                                      size_t(c)]);
                 }
         WriteRgb8Image(path, 2 * m.width, m.height, 4, px.data(), outputs);
         return;
@@ -67,9 +72,11 @@ ConeMap LoadExternalConeMap(const std::string& path, ConeKind kind, int channel,
         if ((channel < 0 && nc < 4) || channel >= nc)
             throw Error(subject + ": has " + std::to_string(nc) + " channel" +
                         (nc == 1 ? "" : "s") + "; the ratio channel " +
-                        (channel < 0 ? std::string("set RGBA") : std::string(1, "RGBA"[channel])) +
+                        (channel < 0 ? std::string("set RGBA")
+                                     : std::string(1, "RGBA"[channel])) +
                         " is missing (GPU Gems 3 maps: ratio in B)");
-        return channel < 0 ? std::pair<int, int>{0, 4} : std::pair<int, int>{channel, channel + 1};
+        return channel < 0 ? std::pair<int, int>{0, 4}
+                           : std::pair<int, int>{channel, channel + 1};
     };
     // 8-bit sources: the codes are converted like the GPU's unorm8, not OIIO's division.
     ImageData img = ReadImageFile(path, subject, pick, /*keep8=*/true);

@@ -1,29 +1,34 @@
 // Relaxed cone maps by Policarpo & Oliveira's Listing 18-1/18-2 (GPU Gems 3, ch. 18): the
-// definition in float (GPU) arithmetic, its brute force, and the fast exact generator. Used by
-// `relaxed`, `cone-normal --relaxed` and `stacked --relaxed` (apex above the surface).
+// definition in float (GPU) arithmetic, its brute force, and the fast exact generator.
+// Used by `relaxed`, `cone-normal --relaxed` and `stacked --relaxed` (apex above the
+// surface).
 //
-// The fast generator evaluates the same float Listing and skips only (source, destination)
-// pairs that provably cannot lower the running minimum. Two bounds do the skipping:
-//  - the distance bound: the march starts at the destination and moves away from the source and
+// The fast generator evaluates the same float Listing and skips only (source,
+// destination) pairs that provably cannot lower the running minimum. Two bounds do the
+// skipping:
+//  - the distance bound: the march starts at the destination and moves away from the
+//  source and
 //    down, so ratio >= |dst - src| / (apex - b) (b = destination depth);
-//  - the exit bound: the march stops only in a cell deeper than the ray, hence deeper than the
-//    ray's z after its first step, and the exit lies on the ray beyond the destination. With
-//    L = the distance from the destination to the nearest such cell within the ray's 22.5°
-//    sector (the exit field, precomputed per texel and sector), the exit is at least L further
-//    out and at least L * (b / |dst - src|) deeper, so
-//    ratio >= (delta + L) / (apex - b - L * b / delta).
-// Both are applied to single offsets and to 4x4, 8x8 and 32x32 groups of offsets. Float error
-// of the listing's march is accounted for by slack terms; the argument is in docs/cone_maps.md
+//  - the exit bound: the march stops only in a cell deeper than the ray, hence deeper
+//  than the
+//    ray's z after its first step, and the exit lies on the ray beyond the destination.
+//    With L = the distance from the destination to the nearest such cell within the
+//    ray's 22.5° sector (the exit field, precomputed per texel and sector), the exit is
+//    at least L further out and at least L * (b / |dst - src|) deeper, so ratio >= (delta
+//    + L) / (apex - b - L * b / delta).
+// Both are applied to single offsets and to 4x4, 8x8 and 32x32 groups of offsets. Float
+// error of the listing's march is accounted for by slack terms; the argument is in
+// docs/cone_maps.md
 // ("Exact pruning of the Listing").
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <bit>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <vector>
-
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
 
 #include "core/error.h"
 #include "texture/cone_map.h"
@@ -33,9 +38,9 @@ namespace reliefsim::detail {
 
 namespace {
 
-/// Nearest-texel index of a float texel coordinate f = u * n, wrapped: the listing's point
-/// sampling with repeat. Same result as fmod on the float (exact) for every f; the integer path
-/// is only taken where the conversion cannot overflow.
+/// Nearest-texel index of a float texel coordinate f = u * n, wrapped: the listing's
+/// point sampling with repeat. Same result as fmod on the float (exact) for every f; the
+/// integer path is only taken where the conversion cannot overflow.
 RS_INLINE int WrapFloorIndex(float f, int n) {
     const float fi = std::floor(f);
     if (std::abs(fi) < 1073741824.0f) {
@@ -58,32 +63,35 @@ constexpr float kInfF = std::numeric_limits<float>::infinity();
 
 /// i mod n for i in [-n, 2n).
 inline int WrapNear(int i, int n) { return i < 0 ? i + n : (i >= n ? i - n : i); }
-constexpr int kSectors = 16;  ///< exit-field sectors: closed 22.5° wedges counter-clockwise from +u
+constexpr int kSectors =
+    16;  ///< exit-field sectors: closed 22.5° wedges counter-clockwise from +u
 using SectorBits = uint16_t;
 constexpr SectorBits kAllSectors = 0xFFFF;
 
-/// One coordinate of the listing's forward step: v / steps (v * inv when steps is a power of
-/// two and inv = 1/steps, the same float). The exit field uses it too, so that its threshold
-/// is the march's z after the first step bit for bit.
+/// One coordinate of the listing's forward step: v / steps (v * inv when steps is a power
+/// of two and inv = 1/steps, the same float). The exit field uses it too, so that its
+/// threshold is the march's z after the first step bit for bit.
 RS_INLINE float ListingStep(float v, int steps, float inv) {
     return inv > 0.0f ? v * inv : v / float(steps);
 }
 
 /// The listing's float arithmetic for one pair, given the source position (sx, sy), the
-/// destination (dstx, dsty) and its sampled depth dstz. `inv` = 1/steps when steps is a power of
-/// two (then v * inv == v / steps exactly: scaling by a power of two), else 0 (divide).
-RS_INLINE float ListingRatio(const HeightField& hf, float sx, float sy, float dstx, float dsty,
-                             float dstz, int steps, float inv, float apex, float best) {
+/// destination (dstx, dsty) and its sampled depth dstz. `inv` = 1/steps when steps is a
+/// power of two (then v * inv == v / steps exactly: scaling by a power of two), else 0
+/// (divide).
+RS_INLINE float ListingRatio(const HeightField& hf, float sx, float sy, float dstx,
+                             float dsty, float dstz, int steps, float inv, float apex,
+                             float best) {
     if (!(dstz > 0.0f)) return kInfF;  // NaN in the listing
     const float src = apex;
     // Exit point deeper than the apex: the march only goes deeper (step z >= 0), ratio 1.
     if (!(dstz < src)) return 1.0f;
     float vx = dstx - sx, vy = dsty - sy, vz = dstz;
     // Early out, provably exact (no margin): every float operation below is monotone, the
-    // march moves away from the source in x and y (the step has the sign of vx, vy) and down
-    // in z (pz >= dstz), so |ex| >= |vx|, |ey| >= |vy| and 0 < src - pz <= src - dstz, hence
-    // the listing's float ratio is >= this float bound, or it is 1 (pz >= src).
-    // (best = +inf, the brute force's default, never prunes.)
+    // march moves away from the source in x and y (the step has the sign of vx, vy) and
+    // down in z (pz >= dstz), so |ex| >= |vx|, |ey| >= |vy| and 0 < src - pz <= src -
+    // dstz, hence the listing's float ratio is >= this float bound, or it is 1 (pz >=
+    // src). (best = +inf, the brute force's default, never prunes.)
     const bool prune = best < kInfF;
     if (prune) {
         const float lb = std::sqrt(vx * vx + vy * vy) / (src - dstz);
@@ -108,11 +116,12 @@ RS_INLINE float ListingRatio(const HeightField& hf, float sx, float sy, float ds
             pz += stz;
             if (pz >= src) return 1.0f;
             if (prune) {
-                // The same monotonicity bounds the ratio by the current point: the exit point
-                // lies further out and deeper. fl(sqrt(cx^2 + cy^2) / (src - pz)) >= best is
-                // tested without sqrt or division: in double the squares, the sum and
-                // (src - pz)^2 are exact or within 2^-50, and the 2^-20 factor exceeds the
-                // float rounding of that quotient (< 2^-22), so this implies the float bound
+                // The same monotonicity bounds the ratio by the current point: the exit
+                // point lies further out and deeper. fl(sqrt(cx^2 + cy^2) / (src - pz))
+                // >= best is tested without sqrt or division: in double the squares, the
+                // sum and (src - pz)^2 are exact or within 2^-50, and the 2^-20 factor
+                // exceeds the float rounding of that quotient (< 2^-22), so this implies
+                // the float bound
                 // >= best.
                 const double cx = double(px - sx), cy = double(py - sy);
                 const double den = double(src - pz);
@@ -138,27 +147,30 @@ float RelaxedPairRatio(const HeightField& hf, int ti, int tj, int dx, int dy, in
     const float W = float(hf.width), H = float(hf.height);
     const float sx = (float(ti) + 0.5f) / W, sy = (float(tj) + 0.5f) / H;
     const float dstx = sx + float(dx) / W, dsty = sy + float(dy) / H;
-    return ListingRatio(hf, sx, sy, dstx, dsty, NearestWrap(hf, dstx, dsty), steps, 0.0f, apex,
-                        kInfF);
+    return ListingRatio(hf, sx, sy, dstx, dsty, NearestWrap(hf, dstx, dsty), steps, 0.0f,
+                        apex, kInfF);
 }
 
 namespace {
 
-/// Bounds on where the listing's float march can stop, and the exit field: per texel t (depth
-/// b) and sector k, L[t * kSectors + k] <= the uv distance from t's centre to every cell deeper
-/// than t(b) = fl(b + fl(fl(1 - b) / steps)) (the march's z after its first step) whose
-/// eps-dilation meets the closed wedge k at t's centre (cells beyond the searched window count
-/// as being at the window's edge; +inf when no cell is deeper than t(b)).
+/// Bounds on where the listing's float march can stop, and the exit field: per texel t
+/// (depth b) and sector k, L[t * kSectors + k] <= the uv distance from t's centre to
+/// every cell deeper than t(b) = fl(b + fl(fl(1 - b) / steps)) (the march's z after its
+/// first step) whose eps-dilation meets the closed wedge k at t's centre (cells beyond
+/// the searched window count as being at the window's edge; +inf when no cell is deeper
+/// than t(b)).
 struct ExitField {
-    double eps = 0;  ///< uv: march points lie within eps of the exact ray (MakeExitFieldSlack)
+    double eps =
+        0;  ///< uv: march points lie within eps of the exact ray (MakeExitFieldSlack)
     double eta = 0;  ///< depth: accumulated rounding of the march's z
     bool usable = false;
-    // Stored as the upper 16 bits of the float (bfloat16 truncated: never larger, so still a
-    // lower bound; half the memory of floats, 128 MB for all four at 1024²).
-    std::vector<uint16_t> L;      ///< kSectors per texel
-    std::vector<uint16_t> Lwin;   ///< kSectors per texel: min of L over the 8x8 window starting there
-    std::vector<uint16_t> Lwin4;  ///< the same over the 4x4 window
-    std::vector<uint16_t> Lwin32; ///< the same over the 32x32 window
+    // Stored as the upper 16 bits of the float (bfloat16 truncated: never larger, so
+    // still a lower bound; half the memory of floats, 128 MB for all four at 1024²).
+    std::vector<uint16_t> L;  ///< kSectors per texel
+    std::vector<uint16_t>
+        Lwin;  ///< kSectors per texel: min of L over the 8x8 window starting there
+    std::vector<uint16_t> Lwin4;   ///< the same over the 4x4 window
+    std::vector<uint16_t> Lwin32;  ///< the same over the 32x32 window
 };
 
 /// Non-negative float -> its upper 16 bits (rounds toward zero, keeps +inf); and back.
@@ -170,39 +182,44 @@ std::vector<uint16_t> PackAll(const std::vector<float>& v) {
     return out;
 }
 
-/// eps covers, for a march point E whose ratio is < 1 (so |E - src| < 1 and |E| < 2): the float
-/// source and destination positions (< 2^-23 per coordinate) and the accumulation of up to
-/// `steps` float additions (< 2^-24 each): E lies within eps of the ray from the exact
-/// destination centre along the float step vector. The same eps also covers the rounding of
-/// |E - src| against |dst - src| + the distance travelled (docs/cone_maps.md).
+/// eps covers, for a march point E whose ratio is < 1 (so |E - src| < 1 and |E| < 2): the
+/// float source and destination positions (< 2^-23 per coordinate) and the accumulation
+/// of up to `steps` float additions (< 2^-24 each): E lies within eps of the ray from the
+/// exact destination centre along the float step vector. The same eps also covers the
+/// rounding of |E - src| against |dst - src| + the distance travelled
+/// (docs/cone_maps.md).
 ExitField MakeExitFieldSlack(const HeightField& hf, int steps) {
     ExitField f;
     const double n = double(std::max(hf.width, hf.height));
     f.eps = 0x1p-18 + double(steps) * 0x1p-23;
     f.eta = double(steps) * 0x1p-24 + 0x1p-21;
-    // The march may also end by running out of steps, at pz >= 1 - eta, where the float ratio
-    // is >= fl|v| / (apex - pz) >= (1 / n - 2^-21) / eta. The exit bound ignores that ending,
-    // so it is used only where such a ratio is always >= 1 (then it cannot lower the minimum).
+    // The march may also end by running out of steps, at pz >= 1 - eta, where the float
+    // ratio is >= fl|v| / (apex - pz) >= (1 / n - 2^-21) / eta. The exit bound ignores
+    // that ending, so it is used only where such a ratio is always >= 1 (then it cannot
+    // lower the minimum).
     f.usable = (1.0 / n - 0x1p-20) >= 2.0 * f.eta && n <= 65536.0;
     return f;
 }
 
 constexpr double kSectorAngle = 2 * std::numbers::pi / kSectors;
 
-/// Closed sectors that meet the angle interval [lo, hi] (radians, any turn, hi - lo < 2 pi).
+/// Closed sectors that meet the angle interval [lo, hi] (radians, any turn, hi - lo < 2
+/// pi).
 SectorBits IntervalSectorMask(double lo, double hi) {
     constexpr double kPi = std::numbers::pi;
     SectorBits m = 0;
     for (int k = 0; k < kSectors; ++k) {
         const double s0 = k * kSectorAngle, s1 = (k + 1) * kSectorAngle;
         for (int w = -2; w <= 2; ++w)
-            if (lo + 2 * kPi * w <= s1 && hi + 2 * kPi * w >= s0) m |= SectorBits(1u << k);
+            if (lo + 2 * kPi * w <= s1 && hi + 2 * kPi * w >= s0)
+                m |= SectorBits(1u << k);
     }
     return m;
 }
 
 /// Closed sectors met by the rectangle [x0, x1] x [y0, y1] (uv, relative to the apex),
-/// conservatively (a tolerance widens every test); all sectors when it contains the origin.
+/// conservatively (a tolerance widens every test); all sectors when it contains the
+/// origin.
 SectorBits RectSectorMask(double x0, double x1, double y0, double y1) {
     if (x0 <= 0 && x1 >= 0 && y0 <= 0 && y1 >= 0) return kAllSectors;
     constexpr double kPi = std::numbers::pi;
@@ -217,8 +234,8 @@ SectorBits RectSectorMask(double x0, double x1, double y0, double y1) {
     return IntervalSectorMask(lo + mid - 1e-9, hi + mid + 1e-9);
 }
 
-/// The exit-field search window: offsets in [-R, R]^2 (unwrapped, texel units) in 8x8 tiles
-/// sorted by their smallest dilated distance.
+/// The exit-field search window: offsets in [-R, R]^2 (unwrapped, texel units) in 8x8
+/// tiles sorted by their smallest dilated distance.
 struct ExitOffset {
     int dx, dy;
     float dist;  ///< uv distance from the centre to the eps-dilated cell, rounded down
@@ -236,7 +253,8 @@ ExitField BuildExitField(const HeightField& hf, int steps, float inv, bool wante
     if (!f.usable) return f;
     const int W = hf.width, H = hf.height;
     const size_t N = size_t(W) * size_t(H);
-    // Window radius: 1/8 uv (at least 8 texels); farther exits are bounded by the window edge.
+    // Window radius: 1/8 uv (at least 8 texels); farther exits are bounded by the window
+    // edge.
     const int Rx = std::max(8, (W + 7) / 8), Ry = std::max(8, (H + 7) / 8);
     const double e = f.eps;
     auto down = [](double v) {
@@ -254,8 +272,10 @@ ExitField BuildExitField(const HeightField& hf, int steps, float inv, bool wante
                     if (dx == 0 && dy == 0) continue;
                     const double x0 = (dx - 0.5) / W - e, x1 = (dx + 0.5) / W + e;
                     const double y0 = (dy - 0.5) / H - e, y1 = (dy + 0.5) / H + e;
-                    const double ax = std::max({0.0, x0, -x1}), ay = std::max({0.0, y0, -y1});
-                    const ExitOffset o{dx, dy, down(std::sqrt(ax * ax + ay * ay) * (1 - 1e-12)),
+                    const double ax = std::max({0.0, x0, -x1}),
+                                 ay = std::max({0.0, y0, -y1});
+                    const ExitOffset o{dx, dy,
+                                       down(std::sqrt(ax * ax + ay * ay) * (1 - 1e-12)),
                                        RectSectorMask(x0, x1, y0, y1)};
                     offs.push_back(o);
                     t.minDist = std::min(t.minDist, o.dist);
@@ -264,8 +284,9 @@ ExitField BuildExitField(const HeightField& hf, int steps, float inv, bool wante
             t.end = int(offs.size());
             if (t.end > t.begin) tiles.push_back(t);
         }
-    std::stable_sort(tiles.begin(), tiles.end(),
-                     [](const ExitTile& a, const ExitTile& b) { return a.minDist < b.minDist; });
+    std::stable_sort(
+        tiles.begin(), tiles.end(),
+        [](const ExitTile& a, const ExitTile& b) { return a.minDist < b.minDist; });
     // Every cell outside the window is at least this far (its dilation included).
     const float edge = down(std::min((Rx + 0.5) / W, (Ry + 0.5) / H) - e);
     float dmax = hf.depth[0];
@@ -273,37 +294,42 @@ ExitField BuildExitField(const HeightField& hf, int steps, float inv, bool wante
     // 8x8 window maxima of depth, wrapped (tiles without a deeper cell are skipped).
     const std::vector<float> winMax = WindowMaxima(hf.depth, W, H, kTile);
     std::vector<float> Lf(N * kSectors, kInfF);
-    tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
-        for (int j = r.begin(); j < r.end(); ++j)
-            for (int i = 0; i < W; ++i) {
-                // A march from this texel stops only in a cell deeper than its z after the first
-                // step, fl(b + fl(fl(1 - b) / steps)) as the listing computes it (z only grows).
-                const float b = hf.At(i, j);
-                const float d = b + ListingStep(1.0f - b, steps, inv);
-                float* L = &Lf[(size_t(j) * size_t(W) + size_t(i)) * kSectors];
-                if (!(d < dmax)) continue;  // nothing is deeper: no cell can end a march
-                std::fill(L, L + kSectors, edge);
-                float worst = edge;
-                for (const ExitTile& t : tiles) {
-                    if (t.minDist >= worst) break;
-                    SectorBits open = 0;
-                    for (int k = 0; k < kSectors; ++k)
-                        if ((t.mask >> k & 1u) && L[k] > t.minDist) open |= SectorBits(1u << k);
-                    if (!open) continue;
-                    if (!(winMax[size_t(Wrap(j + t.oy, H)) * size_t(W) + size_t(Wrap(i + t.ox, W))] >
-                          d))
-                        continue;
-                    bool changed = false;
-                    for (int o = t.begin; o < t.end; ++o) {
-                        const ExitOffset& off = offs[size_t(o)];
-                        if (!(off.mask & open)) continue;
-                        if (!(hf.At(Wrap(i + off.dx, W), Wrap(j + off.dy, H)) > d)) continue;
-                        changed |= LowerMasked(unsigned(off.mask), off.dist, L);
+    tbb::parallel_for(
+        tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
+            for (int j = r.begin(); j < r.end(); ++j)
+                for (int i = 0; i < W; ++i) {
+                    // A march from this texel stops only in a cell deeper than its z
+                    // after the first step, fl(b + fl(fl(1 - b) / steps)) as the listing
+                    // computes it (z only grows).
+                    const float b = hf.At(i, j);
+                    const float d = b + ListingStep(1.0f - b, steps, inv);
+                    float* L = &Lf[(size_t(j) * size_t(W) + size_t(i)) * kSectors];
+                    if (!(d < dmax))
+                        continue;  // nothing is deeper: no cell can end a march
+                    std::fill(L, L + kSectors, edge);
+                    float worst = edge;
+                    for (const ExitTile& t : tiles) {
+                        if (t.minDist >= worst) break;
+                        SectorBits open = 0;
+                        for (int k = 0; k < kSectors; ++k)
+                            if ((t.mask >> k & 1u) && L[k] > t.minDist)
+                                open |= SectorBits(1u << k);
+                        if (!open) continue;
+                        if (!(winMax[size_t(Wrap(j + t.oy, H)) * size_t(W) +
+                                     size_t(Wrap(i + t.ox, W))] > d))
+                            continue;
+                        bool changed = false;
+                        for (int o = t.begin; o < t.end; ++o) {
+                            const ExitOffset& off = offs[size_t(o)];
+                            if (!(off.mask & open)) continue;
+                            if (!(hf.At(Wrap(i + off.dx, W), Wrap(j + off.dy, H)) > d))
+                                continue;
+                            changed |= LowerMasked(unsigned(off.mask), off.dist, L);
+                        }
+                        if (changed) worst = *std::max_element(L, L + kSectors);
                     }
-                    if (changed) worst = *std::max_element(L, L + kSectors);
                 }
-            }
-    });
+        });
     // Window minima of L per sector, for offset tiles (8x8) and their quarters (4x4).
     // On the packed values: their order is the floats' order.
     f.L = PackAll(Lf);
@@ -314,16 +340,18 @@ ExitField BuildExitField(const HeightField& hf, int steps, float inv, bool wante
     return f;
 }
 
-/// The exit bound, as a test: true when the listing's float ratio is provably >= best (or the
-/// march provably ends at or below the apex: ratio 1) for every pair with source-to-destination
-/// distance >= dLo (exact uv), numerator factor invD <= (1 - 2^-20) / (distance + 2^-21) (so
-/// the depth gained per uv along the ray is >= b * invD), destination depth >= b and
-/// exit-field value >= L. Real numbers in double with slack for every float rounding
-/// (docs/cone_maps.md); the double roundings here are far inside the 2^-20 margins.
-RS_INLINE bool ExitBoundPrunes(const ExitField& f, double dLo, double invD, double b, double L,
-                               double apex, double best, double stepLo = 0) {
-    // A lower bound of the distance the march travels from the destination before it stops
-    // (k * |step| for k >= 1 steps): the exit field, less the float slack, or one step.
+/// The exit bound, as a test: true when the listing's float ratio is provably >= best (or
+/// the march provably ends at or below the apex: ratio 1) for every pair with
+/// source-to-destination distance >= dLo (exact uv), numerator factor invD <= (1 - 2^-20)
+/// / (distance + 2^-21) (so the depth gained per uv along the ray is >= b * invD),
+/// destination depth >= b and exit-field value >= L. Real numbers in double with slack
+/// for every float rounding (docs/cone_maps.md); the double roundings here are far inside
+/// the 2^-20 margins.
+RS_INLINE bool ExitBoundPrunes(const ExitField& f, double dLo, double invD, double b,
+                               double L, double apex, double best, double stepLo = 0) {
+    // A lower bound of the distance the march travels from the destination before it
+    // stops (k * |step| for k >= 1 steps): the exit field, less the float slack, or one
+    // step.
     const double lam = std::max(L - 2.0 * f.eps, stepLo);
     if (!(lam > 0)) return false;
     const double den = apex - b - lam * (b * invD) + f.eta;
@@ -345,11 +373,12 @@ struct RelaxedOffset {
     double dist;    ///< exact uv distance
     double invD;    ///< (1 - 2^-20) / (dist + 2^-21), rounded down
     int dx, dy;
-    float fdx, fdy;  ///< float(dx) / W, float(dy) / H: the listing's offset
+    float fdx, fdy;   ///< float(dx) / W, float(dy) / H: the listing's offset
     uint8_t lx, ly;   ///< position in its 8x8 tile
     SectorBits mask;  ///< sectors the listing's float step direction can lie in
 };
-/// A group of offsets (an 8x8 tile or one of its 4x4 quarters) with bounds for all of them.
+/// A group of offsets (an 8x8 tile or one of its 4x4 quarters) with bounds for all of
+/// them.
 struct RelaxedGroup {
     int begin = 0, end = 0;  ///< range in the offset list
     int ox = 0, oy = 0;      ///< window origin relative to the source texel
@@ -358,10 +387,11 @@ struct RelaxedGroup {
     double invD = 1;         ///< min invD (farthest offset)
     SectorBits mask = 0;     ///< union of the offsets' sectors
     void Add(const RelaxedOffset& o) { Add(o.distLo, o.dist, o.invD, o.mask); }
-    /// Extends the bounds to a whole group (a tile into its super-tile); counts one member.
+    /// Extends the bounds to a whole group (a tile into its super-tile); counts one
+    /// member.
     void Add(const RelaxedGroup& g) { Add(g.distLo, g.dLo, g.invD, g.mask); }
 
-private:
+  private:
     void Add(double lo, double d, double inv, SectorBits m) {
         distLo = begin == end ? lo : std::min(distLo, lo);
         dLo = begin == end ? d : std::min(dLo, d);
@@ -383,10 +413,11 @@ ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool br
                           ConeKind outKind, bool exitField) {
     const float dmin = CheckedMinDepth(hf);
     if (hf.width > (1 << 20) || hf.height > (1 << 20))
-        throw Error("height map \"" + hf.name + "\": " + std::to_string(hf.width) + "x" +
-                    std::to_string(hf.height) +
-                    " too large for the relaxed cone map; expected at most 2^20 texels a side "
-                    "(the float error bounds of its pruning assume it)");
+        throw Error(
+            "height map \"" + hf.name + "\": " + std::to_string(hf.width) + "x" +
+            std::to_string(hf.height) +
+            " too large for the relaxed cone map; expected at most 2^20 texels a side "
+            "(the float error bounds of its pruning assume it)");
     const RelaxedOut out = outKind == ConeKind::ConeNormal ? RelaxedOut::ConeNormal
                            : outKind == ConeKind::Stacked  ? RelaxedOut::Stacked
                                                            : RelaxedOut::Ratio;
@@ -407,20 +438,23 @@ ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool br
     if (brute) {
         const std::vector<Offset> offs = MakeOffsets(g, ConeKind::Cone);
         ProgressCounter progress(p.progress, H);
-        tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
-            for (int j = r.begin(); j < r.end(); ++j, progress.Add(1))
-                for (int i = 0; i < W; ++i)
-                    for (int c = 0; c < K; ++c) {
-                        const float apex = out == RelaxedOut::Stacked ? StackedApex(hf.At(i, j), c, K)
-                                                                      : hf.At(i, j);
-                        float best = 1.0f;
-                        for (const Offset& o : offs) {
-                            const float r2 = RelaxedPairRatio(hf, i, j, o.dx, o.dy, p.searchSteps, apex);
-                            if (best > r2) best = r2;
+        tbb::parallel_for(
+            tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
+                for (int j = r.begin(); j < r.end(); ++j, progress.Add(1))
+                    for (int i = 0; i < W; ++i)
+                        for (int c = 0; c < K; ++c) {
+                            const float apex = out == RelaxedOut::Stacked
+                                                   ? StackedApex(hf.At(i, j), c, K)
+                                                   : hf.At(i, j);
+                            float best = 1.0f;
+                            for (const Offset& o : offs) {
+                                const float r2 = RelaxedPairRatio(hf, i, j, o.dx, o.dy,
+                                                                  p.searchSteps, apex);
+                                if (best > r2) best = r2;
+                            }
+                            store(i, j, c, best);
                         }
-                        store(i, j, c, best);
-                    }
-        });
+            });
         return m;
     }
 
@@ -445,11 +479,11 @@ ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool br
             const Offset& off = to.offsets[size_t(o)];
             RelaxedOffset ro;
             ro.dist = std::sqrt(double(off.s)) / g.scale;
-            // distLo / (d - b) is below the listing's float distance bound fl|v| / (d - b):
-            // |vx - dx/W| <= 3 * 2^-24 (three roundings of values below 2), so fl|v| >= dist -
-            // 2^-21, and the float sqrt, products, sum, difference and division lose at most
-            // 2^-22 relatively; the 2^-20 and 2^-19 slacks also cover the double rounding of
-            // the product distLo is compared against (best * (d - b)).
+            // distLo / (d - b) is below the listing's float distance bound fl|v| / (d -
+            // b): |vx - dx/W| <= 3 * 2^-24 (three roundings of values below 2), so fl|v|
+            // >= dist - 2^-21, and the float sqrt, products, sum, difference and division
+            // lose at most 2^-22 relatively; the 2^-20 and 2^-19 slacks also cover the
+            // double rounding of the product distLo is compared against (best * (d - b)).
             ro.distLo = std::max(0.0, ro.dist - 0x1p-20) * (1.0 - 0x1p-19);
             ro.invD = (1.0 - 0x1p-20) * (1.0 - 0x1p-40) / (ro.dist + 0x1p-21);
             ro.dx = off.dx;
@@ -459,10 +493,11 @@ ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool br
             ro.lx = uint8_t(off.dx - t.ox);
             ro.ly = uint8_t(off.dy - t.oy);
             // Sectors the listing's float step direction can lie in: its float offset is
-            // within 2^-22.5 uv of the exact one (|offset| >= 2^-20), so its angle is within
-            // 2^-22 / |offset| of the exact angle; the per-component scaling and rounding of
-            // the step keep weak inequalities between x, y and 0, and every sector boundary
-            // that matters here is of that kind only up to this tolerance.
+            // within 2^-22.5 uv of the exact one (|offset| >= 2^-20), so its angle is
+            // within 2^-22 / |offset| of the exact angle; the per-component scaling and
+            // rounding of the step keep weak inequalities between x, y and 0, and every
+            // sector boundary that matters here is of that kind only up to this
+            // tolerance.
             const double angle = std::atan2(double(off.dy) / H, double(off.dx) / W);
             const double tol = 0x1p-22 / ro.dist + 1e-12;
             ro.mask = IntervalSectorMask(angle - tol, angle + tol);
@@ -485,127 +520,169 @@ ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool br
             }
         }
     }
-    // Bounds of the 32x32 super-tiles of the tiled offsets (to.supers, sorted by distance;
-    // their tiles sorted by distance inside). Any order of evaluation gives the same minimum.
+    // Bounds of the 32x32 super-tiles of the tiled offsets (to.supers, sorted by
+    // distance; their tiles sorted by distance inside). Any order of evaluation gives the
+    // same minimum.
     std::vector<RelaxedGroup> superBounds(to.supers.size());
     for (size_t si = 0; si < to.supers.size(); ++si) {
         const OffsetSuperTile& st = to.supers[si];
         RelaxedGroup& sb = superBounds[si];
         sb.ox = st.ox;
         sb.oy = st.oy;
-        for (int x = st.first; x < st.last; ++x) sb.Add(tiles[size_t(to.superOrder[size_t(x)])].all);
+        for (int x = st.first; x < st.last; ++x)
+            sb.Add(tiles[size_t(to.superOrder[size_t(x)])].all);
     }
-    // Pruning is exact (the distance bound below the listing's float bound, for offsets and
-    // whole groups, and the exit bound): a pair is skipped only when its listing ratio provably
-    // cannot lower the running minimum; ties do not change it either (strict "<" as in the
-    // listing), so the minimum equals the brute force's for any order of evaluation.
+    // Pruning is exact (the distance bound below the listing's float bound, for offsets
+    // and whole groups, and the exit bound): a pair is skipped only when its listing
+    // ratio provably cannot lower the running minimum; ties do not change it either
+    // (strict "<" as in the listing), so the minimum equals the brute force's for any
+    // order of evaluation.
     ProgressCounter progress(p.progress, H);
-    tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& rows) {
-      for (int j = rows.begin(); j < rows.end(); ++j, progress.Add(1)) {
-        int seedDx[16] = {}, seedDy[16] = {};
-        bool seedOk[16] = {};
-        for (int i = 0; i < W; ++i) {
-          const float d = hf.At(i, j);
-          for (int c = 0; c < K; ++c) {
-            const float apex = out == RelaxedOut::Stacked ? StackedApex(d, c, K) : d;
-            float best = 1.0f;
-            int argDx = 0, argDy = 0;
-            bool found = false;
-            // The listing's source position and offsets, the same float values as
-            // RelaxedPairRatio's; the destination depth is the texel's (it samples exactly it).
-            const float sx = (float(i) + 0.5f) / float(W), sy = (float(j) + 0.5f) / float(H);
-            auto consider = [&](int dx, int dy, float fdx, float fdy, float b) {
-                const float r = ListingRatio(hf, sx, sy, sx + fdx, sy + fdy, b, p.searchSteps,
-                                             inv, apex, best);
-                if (best > r) {
-                    best = r;
-                    argDx = dx;
-                    argDy = dy;
-                    found = true;
-                }
-            };
-            if (apex > dmin) {
-                // Seed with the destination that set the left neighbour's minimum (ratios are
-                // spatially coherent, so `best` starts near its final value and the bounds
-                // prune most of the search): any pair of the definition is an upper bound.
-                if (seedOk[c]) {
-                    const int dx = seedDx[c] - 1, dy = seedDy[c];
-                    if ((dx != 0 || dy != 0) && dx >= -g.halfX)
-                        consider(dx, dy, float(dx) / float(W), float(dy) / float(H),
-                                 hf.At(Wrap(i + dx, W), Wrap(j + dy, H)));
-                }
-                const double dApex = double(apex);
-                // A group is skipped when no pair in it can lower `best`: no destination above
-                // the apex in its window, the distance bound, or the exit bound.
-                auto groupPrunes = [&](const RelaxedGroup& q, size_t w, float wmin,
-                                       const std::vector<uint16_t>& lwin) {
-                    if (!(wmin < apex)) return true;
-                    if (q.distLo >= double(best) * (dApex - double(wmin))) return true;
-                    if (!ef.usable) return false;
-                    return ExitBoundPrunes(ef, q.dLo, q.invD, double(wmin),
-                                           double(MinOverSectors(lwin, w, q.mask)), dApex,
-                                           double(best));
-                };
-                const double reachAll = dApex - double(dmin);
-                for (size_t si = 0; si < to.supers.size(); ++si) {
-                  const OffsetSuperTile& st = to.supers[si];
-                  const RelaxedGroup& sb = superBounds[si];
-                  if (sb.distLo >= double(best) * reachAll) break;  // sorted by distance
-                  {
-                    const size_t ws = size_t(WrapNear(j + sb.oy, H)) * size_t(W) +
-                                      size_t(WrapNear(i + sb.ox, W));
-                    if (groupPrunes(sb, ws, win32[ws], ef.Lwin32)) continue;
-                  }
-                  for (int x = st.first; x < st.last; ++x) {
-                    const RelaxedTile& t = tiles[size_t(to.superOrder[size_t(x)])];
-                    if (t.all.distLo >= double(best) * reachAll) break;  // sorted by distance
-                    const int wx = WrapNear(i + t.all.ox, W), wy = WrapNear(j + t.all.oy, H);
-                    const size_t w0 = size_t(wy) * size_t(W) + size_t(wx);
-                    if (groupPrunes(t.all, w0, win[w0], ef.Lwin)) continue;
-                    // Wrapped rows and columns of the tile's destinations.
-                    size_t rowBase[kTile];
-                    int col[kTile];
-                    for (int a = 0; a < t.ny; ++a) rowBase[a] = size_t(WrapNear(wy + a, H)) * size_t(W);
-                    for (int a = 0; a < t.nx; ++a) col[a] = WrapNear(wx + a, W);
-                    for (int k = 0; k < 4; ++k) {
-                        const RelaxedGroup& q = t.quarter[k];
-                        if (q.begin == q.end) continue;
-                        const size_t w4 = rowBase[(k >> 1) * 4] + size_t(col[(k & 1) * 4]);
-                        if (groupPrunes(q, w4, win4[w4], ef.Lwin4)) continue;
-                        for (int o = q.begin; o < q.end; ++o) {
-                            const RelaxedOffset& off = offs[size_t(o)];
-                            // The listing samples exactly this texel as the destination (its
-                            // float texel coordinate is within W * 2^-22 < 1/2 of the
-                            // centre), so the bounds with this texel's depth hold for the pair.
-                            const size_t dst = rowBase[off.ly] + size_t(col[off.lx]);
-                            const float b = hf.depth[dst];
-                            const double db = double(b);
-                            if (!(b < apex) || off.distLo >= double(best) * (dApex - db)) continue;
-                            if (ef.usable) {
-                                const float lp = MinOverSectors(ef.L, dst, off.mask);
-                                // One step of the march is |v| (1 - b) / (b steps) long (float
-                                // roundings of v, the scale and the step within the factors).
-                                if (!(b > 0.0f)) continue;  // the listing gives NaN: ignored
-                                const double stepLo = (off.dist - 0x1p-22) * (1.0 - db) /
-                                                      (db * double(p.searchSteps)) * (1.0 - 0x1p-20);
-                                if (ExitBoundPrunes(ef, off.dist, off.invD, db, double(lp), dApex,
-                                                    double(best), stepLo))
-                                    continue;
+    tbb::parallel_for(
+        tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& rows) {
+            for (int j = rows.begin(); j < rows.end(); ++j, progress.Add(1)) {
+                int seedDx[16] = {}, seedDy[16] = {};
+                bool seedOk[16] = {};
+                for (int i = 0; i < W; ++i) {
+                    const float d = hf.At(i, j);
+                    for (int c = 0; c < K; ++c) {
+                        const float apex =
+                            out == RelaxedOut::Stacked ? StackedApex(d, c, K) : d;
+                        float best = 1.0f;
+                        int argDx = 0, argDy = 0;
+                        bool found = false;
+                        // The listing's source position and offsets, the same float
+                        // values as RelaxedPairRatio's; the destination depth is the
+                        // texel's (it samples exactly it).
+                        const float sx = (float(i) + 0.5f) / float(W),
+                                    sy = (float(j) + 0.5f) / float(H);
+                        auto consider = [&](int dx, int dy, float fdx, float fdy,
+                                            float b) {
+                            const float r =
+                                ListingRatio(hf, sx, sy, sx + fdx, sy + fdy, b,
+                                             p.searchSteps, inv, apex, best);
+                            if (best > r) {
+                                best = r;
+                                argDx = dx;
+                                argDy = dy;
+                                found = true;
                             }
-                            consider(off.dx, off.dy, off.fdx, off.fdy, b);
+                        };
+                        if (apex > dmin) {
+                            // Seed with the destination that set the left neighbour's
+                            // minimum (ratios are spatially coherent, so `best` starts
+                            // near its final value and the bounds prune most of the
+                            // search): any pair of the definition is an upper bound.
+                            if (seedOk[c]) {
+                                const int dx = seedDx[c] - 1, dy = seedDy[c];
+                                if ((dx != 0 || dy != 0) && dx >= -g.halfX)
+                                    consider(dx, dy, float(dx) / float(W),
+                                             float(dy) / float(H),
+                                             hf.At(Wrap(i + dx, W), Wrap(j + dy, H)));
+                            }
+                            const double dApex = double(apex);
+                            // A group is skipped when no pair in it can lower `best`: no
+                            // destination above the apex in its window, the distance
+                            // bound, or the exit bound.
+                            auto groupPrunes = [&](const RelaxedGroup& q, size_t w,
+                                                   float wmin,
+                                                   const std::vector<uint16_t>& lwin) {
+                                if (!(wmin < apex)) return true;
+                                if (q.distLo >= double(best) * (dApex - double(wmin)))
+                                    return true;
+                                if (!ef.usable) return false;
+                                return ExitBoundPrunes(
+                                    ef, q.dLo, q.invD, double(wmin),
+                                    double(MinOverSectors(lwin, w, q.mask)), dApex,
+                                    double(best));
+                            };
+                            const double reachAll = dApex - double(dmin);
+                            for (size_t si = 0; si < to.supers.size(); ++si) {
+                                const OffsetSuperTile& st = to.supers[si];
+                                const RelaxedGroup& sb = superBounds[si];
+                                if (sb.distLo >= double(best) * reachAll)
+                                    break;  // sorted by distance
+                                {
+                                    const size_t ws =
+                                        size_t(WrapNear(j + sb.oy, H)) * size_t(W) +
+                                        size_t(WrapNear(i + sb.ox, W));
+                                    if (groupPrunes(sb, ws, win32[ws], ef.Lwin32))
+                                        continue;
+                                }
+                                for (int x = st.first; x < st.last; ++x) {
+                                    const RelaxedTile& t =
+                                        tiles[size_t(to.superOrder[size_t(x)])];
+                                    if (t.all.distLo >= double(best) * reachAll)
+                                        break;  // sorted by distance
+                                    const int wx = WrapNear(i + t.all.ox, W),
+                                              wy = WrapNear(j + t.all.oy, H);
+                                    const size_t w0 = size_t(wy) * size_t(W) + size_t(wx);
+                                    if (groupPrunes(t.all, w0, win[w0], ef.Lwin))
+                                        continue;
+                                    // Wrapped rows and columns of the tile's
+                                    // destinations.
+                                    size_t rowBase[kTile];
+                                    int col[kTile];
+                                    for (int a = 0; a < t.ny; ++a)
+                                        rowBase[a] =
+                                            size_t(WrapNear(wy + a, H)) * size_t(W);
+                                    for (int a = 0; a < t.nx; ++a)
+                                        col[a] = WrapNear(wx + a, W);
+                                    for (int k = 0; k < 4; ++k) {
+                                        const RelaxedGroup& q = t.quarter[k];
+                                        if (q.begin == q.end) continue;
+                                        const size_t w4 = rowBase[(k >> 1) * 4] +
+                                                          size_t(col[(k & 1) * 4]);
+                                        if (groupPrunes(q, w4, win4[w4], ef.Lwin4))
+                                            continue;
+                                        for (int o = q.begin; o < q.end; ++o) {
+                                            const RelaxedOffset& off = offs[size_t(o)];
+                                            // The listing samples exactly this texel as
+                                            // the destination (its float texel coordinate
+                                            // is within W * 2^-22 < 1/2 of the centre),
+                                            // so the bounds with this texel's depth hold
+                                            // for the pair.
+                                            const size_t dst =
+                                                rowBase[off.ly] + size_t(col[off.lx]);
+                                            const float b = hf.depth[dst];
+                                            const double db = double(b);
+                                            if (!(b < apex) ||
+                                                off.distLo >= double(best) * (dApex - db))
+                                                continue;
+                                            if (ef.usable) {
+                                                const float lp =
+                                                    MinOverSectors(ef.L, dst, off.mask);
+                                                // One step of the march is |v| (1 - b) /
+                                                // (b steps) long (float roundings of v,
+                                                // the scale and the step within the
+                                                // factors).
+                                                if (!(b > 0.0f))
+                                                    continue;  // the listing gives NaN:
+                                                               // ignored
+                                                const double stepLo =
+                                                    (off.dist - 0x1p-22) * (1.0 - db) /
+                                                    (db * double(p.searchSteps)) *
+                                                    (1.0 - 0x1p-20);
+                                                if (ExitBoundPrunes(ef, off.dist,
+                                                                    off.invD, db,
+                                                                    double(lp), dApex,
+                                                                    double(best), stepLo))
+                                                    continue;
+                                            }
+                                            consider(off.dx, off.dy, off.fdx, off.fdy, b);
+                                        }
+                                    }
+                                }
+                            }
                         }
+                        seedOk[c] = found;
+                        seedDx[c] = argDx;
+                        seedDy[c] = argDy;
+                        store(i, j, c, best);
                     }
-                  }
                 }
             }
-            seedOk[c] = found;
-            seedDx[c] = argDx;
-            seedDy[c] = argDy;
-            store(i, j, c, best);
-          }
-        }
-      }
-    });
+        });
     return m;
 }
 

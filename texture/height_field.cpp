@@ -24,21 +24,23 @@ HeightField QuantizeToUnorm8(const HeightField& hf) {
     std::vector<uint8_t> d8(hf.depth.size());
     for (size_t k = 0; k < d8.size(); ++k)
         d8[k] = uint8_t(std::lround(double(hf.depth[k]) * 255.0));
-    return HeightFieldFromUnorm8(hf.width, hf.height, std::move(d8), hf.name + " (8-bit)");
+    return HeightFieldFromUnorm8(hf.width, hf.height, std::move(d8),
+                                 hf.name + " (8-bit)");
 }
 
 void ValidateHeightField(const HeightField& hf) {
     if (hf.Empty())
-        throw Error("height map \"" + hf.name + "\": has zero size (" + std::to_string(hf.width) +
-                    "x" + std::to_string(hf.height) + ")");
+        throw Error("height map \"" + hf.name + "\": has zero size (" +
+                    std::to_string(hf.width) + "x" + std::to_string(hf.height) + ")");
     if (hf.depth.size() != size_t(hf.width) * size_t(hf.height))
-        throw Error("height map \"" + hf.name + "\": pixel count does not match its size");
+        throw Error("height map \"" + hf.name +
+                    "\": pixel count does not match its size");
     for (size_t k = 0; k < hf.depth.size(); ++k) {
         float d = hf.depth[k];
         if (!std::isfinite(d) || d < 0.0f || d > 1.0f) {
             std::ostringstream s;
-            s << "height map \"" << hf.name << "\": texel (" << k % size_t(hf.width) << ", "
-              << k / size_t(hf.width) << ") is " << d
+            s << "height map \"" << hf.name << "\": texel (" << k % size_t(hf.width)
+              << ", " << k / size_t(hf.width) << ") is " << d
               << "; heights must be finite and in [0,1] (NaN/Inf are not allowed)";
             throw Error(s.str());
         }

@@ -59,7 +59,7 @@ std::string Quote(const std::string& s) { return "\"" + s + "\""; }
 /// the user a second, unrelated error line. What was captured goes into our one line.
 /// Serialised by a mutex (stderr is process-wide).
 class StderrCapture {
-public:
+  public:
     StderrCapture() : lock_(Mutex()) {
         std::fflush(stderr);
         saved_ = ::dup(2);
@@ -88,7 +88,7 @@ public:
     StderrCapture(const StderrCapture&) = delete;
     StderrCapture& operator=(const StderrCapture&) = delete;
 
-private:
+  private:
     static std::mutex& Mutex() {
         static std::mutex m;
         return m;
@@ -106,18 +106,17 @@ private:
     std::FILE* file_ = nullptr;
 };
 
-/// A regular file opened once and mapped read-only; OpenImageIO decodes it from memory, so
-/// a FIFO, a device or a directory is refused before anything reads from it, and the file
-/// is never opened a second time.
+/// A regular file opened once and mapped read-only; OpenImageIO decodes it from memory,
+/// so a FIFO, a device or a directory is refused before anything reads from it, and the
+/// file is never opened a second time.
 class MappedFile {
-public:
+  public:
     MappedFile(const std::string& path, const std::string& subject) {
         // O_NONBLOCK: opening a FIFO for reading must not wait for a writer.
         fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK | O_NOCTTY);
         if (fd_ < 0) {
             const int e = errno;
-            if (e == ENOENT)
-                throw Error(subject + ": does not exist");
+            if (e == ENOENT) throw Error(subject + ": does not exist");
             throw Error(subject + ": cannot open (" + std::strerror(e) + ")");
         }
         struct stat st {};
@@ -161,7 +160,7 @@ public:
     const void* Data() const { return data_; }
     size_t Size() const { return size_; }
 
-private:
+  private:
     int fd_ = -1;
     void* data_ = nullptr;
     size_t size_ = 0;
@@ -170,9 +169,9 @@ private:
 /// OpenEXR sizes its tables from the header's dataWindow while it opens a file, before
 /// anything can be checked, so a 400-byte file claiming a vast window costs gigabytes and
 /// seconds. This scan reads the headers the way the format defines them (attributes of
-/// name, type, int32 size, value, up to an empty name; multi-part files repeat headers up to
-/// an empty one) and refuses attributes that run past the end of the file and data windows
-/// over kMaxImageSide, before OpenEXR sees the file.
+/// name, type, int32 size, value, up to an empty name; multi-part files repeat headers up
+/// to an empty one) and refuses attributes that run past the end of the file and data
+/// windows over kMaxImageSide, before OpenEXR sees the file.
 void PrescanExrHeader(const unsigned char* p, size_t n, const std::string& subject) {
     if (n < 8 || !(p[0] == 0x76 && p[1] == 0x2f && p[2] == 0x31 && p[3] == 0x01)) return;
     const bool multipart = (p[5] & 0x10) != 0;  // version field bit 12
@@ -213,9 +212,11 @@ void PrescanExrHeader(const unsigned char* p, size_t n, const std::string& subje
                 size == 16) {
                 const int64_t w = int64_t(readInt(o + 8)) - readInt(o) + 1;
                 const int64_t h = int64_t(readInt(o + 12)) - readInt(o + 4) + 1;
-                if (name == "dataWindow" && (w < 1 || h < 1 || w > kMaxImageSide || h > kMaxImageSide))
+                if (name == "dataWindow" &&
+                    (w < 1 || h < 1 || w > kMaxImageSide || h > kMaxImageSide))
                     throw Error(subject + ": header says " + std::to_string(w) + "x" +
-                                std::to_string(h) + ", outside 1.." + std::to_string(kMaxImageSide) +
+                                std::to_string(h) + ", outside 1.." +
+                                std::to_string(kMaxImageSide) +
                                 " pixels a side (llvmpipe's largest texture)");
             }
             o += size_t(size);
@@ -230,7 +231,8 @@ ImageData ReadImageFile(const std::string& path, const std::string& subject,
                         const ChannelPicker& pickChannels, bool keep8) {
     if (path.empty()) throw Error(subject + ": empty path; give an image file");
     MappedFile file(path, subject);
-    PrescanExrHeader(static_cast<const unsigned char*>(file.Data()), file.Size(), subject);
+    PrescanExrHeader(static_cast<const unsigned char*>(file.Data()), file.Size(),
+                     subject);
     OIIO::Filesystem::IOMemReader proxy(file.Data(), file.Size());
     StderrCapture capture;
     auto in = OIIO::ImageInput::open(path, nullptr, &proxy);
@@ -239,33 +241,41 @@ ImageData ReadImageFile(const std::string& path, const std::string& subject,
         const std::string printed = capture.Finish();
         if (err.empty()) err = printed;
         throw Error(subject + ": is not a readable image (" +
-                    (err.empty() ? std::string("unknown or unsupported format") : OneLine(err, 400)) +
+                    (err.empty() ? std::string("unknown or unsupported format")
+                                 : OneLine(err, 400)) +
                     "); expected " + kImageFormatList);
     }
     const std::string format = in->format_name();
     if (std::find_if(std::begin(kImageFormats), std::end(kImageFormats),
-                     [&](const char* f) { return format == f; }) == std::end(kImageFormats))
-        throw Error(subject + ": format \"" + format + "\" is not an image file format read "
-                    "here; expected " + kImageFormatList);
+                     [&](const char* f) { return format == f; }) ==
+        std::end(kImageFormats))
+        throw Error(subject + ": format \"" + format +
+                    "\" is not an image file format read "
+                    "here; expected " +
+                    kImageFormatList);
     const OIIO::ImageSpec& spec = in->spec();
     const int64_t w = spec.width, h = spec.height, nc = spec.nchannels;
     if (w <= 0 || h <= 0 || nc <= 0)
         throw Error(subject + ": has zero size (" + std::to_string(w) + "x" +
                     std::to_string(h) + ", " + std::to_string(nc) + " channels)");
     if (w > kMaxImageSide || h > kMaxImageSide)
-        throw Error(subject + ": header says " + std::to_string(w) + "x" + std::to_string(h) +
-                    ", larger than the " + std::to_string(kMaxImageSide) + "x" +
-                    std::to_string(kMaxImageSide) + " limit (llvmpipe's largest texture)");
+        throw Error(subject + ": header says " + std::to_string(w) + "x" +
+                    std::to_string(h) + ", larger than the " +
+                    std::to_string(kMaxImageSide) + "x" + std::to_string(kMaxImageSide) +
+                    " limit (llvmpipe's largest texture)");
     if (nc > kMaxImageChannels)
-        throw Error(subject + ": header says " + std::to_string(nc) + " channels; at most " +
-                    std::to_string(kMaxImageChannels) + " are read");
+        throw Error(subject + ": header says " + std::to_string(nc) +
+                    " channels; at most " + std::to_string(kMaxImageChannels) +
+                    " are read");
     if (spec.depth != 1 || spec.deep)
         throw Error(subject + ": is a volume or deep image; expected a flat 2D image");
     if (spec.tile_width > 0 &&
-        (int64_t(spec.tile_width) * std::max(1, spec.tile_height) > int64_t(kMaxImageSide) * 64 ||
+        (int64_t(spec.tile_width) * std::max(1, spec.tile_height) >
+             int64_t(kMaxImageSide) * 64 ||
          spec.tile_width > kMaxImageSide || spec.tile_height > kMaxImageSide))
-        throw Error(subject + ": header says tiles of " + std::to_string(spec.tile_width) +
-                    "x" + std::to_string(spec.tile_height) + " pixels; implausible for a " +
+        throw Error(subject + ": header says tiles of " +
+                    std::to_string(spec.tile_width) + "x" +
+                    std::to_string(spec.tile_height) + " pixels; implausible for a " +
                     std::to_string(w) + "x" + std::to_string(h) + " image");
     const auto [c0, c1] = pickChannels(int(nc));
     RS_CHECK(c0 >= 0 && c1 > c0 && c1 <= nc);
@@ -275,7 +285,8 @@ ImageData ReadImageFile(const std::string& path, const std::string& subject,
     const uint64_t pixels = uint64_t(w) * uint64_t(h);
     const uint64_t need = pixels * uint64_t(c1 - c0) * (as8 ? 1u : 4u) +
                           pixels * uint64_t(nc) * uint64_t(spec.format.size());
-    RequireMemory(need, subject + " (" + std::to_string(w) + "x" + std::to_string(h) + ")",
+    RequireMemory(need,
+                  subject + " (" + std::to_string(w) + "x" + std::to_string(h) + ")",
                   "use a smaller image");
     ImageData img;
     img.width = int(w);
@@ -300,9 +311,10 @@ ImageData ReadImageFile(const std::string& path, const std::string& subject,
     const std::string printed = capture.Finish();
     if (!ok || !err.empty()) {
         if (!printed.empty()) err += "; " + printed;
-        throw Error(subject + ": is damaged or truncated (" +
-                    (err.empty() ? std::string("the decoder stopped early") : OneLine(err, 400)) +
-                    ")");
+        throw Error(
+            subject + ": is damaged or truncated (" +
+            (err.empty() ? std::string("the decoder stopped early") : OneLine(err, 400)) +
+            ")");
     }
     return img;
 }
@@ -312,11 +324,21 @@ HeightField LoadHeightMapFile(const std::string& path, const MapLoadOptions& opt
     auto pick = [&](int nc) -> std::pair<int, int> {
         int c = 0;
         switch (options.channel) {
-            case Channel::Auto: c = nc <= 2 ? 0 : (nc >= 4 ? 3 : -1); break;
-            case Channel::R: c = 0; break;
-            case Channel::G: c = 1; break;
-            case Channel::B: c = 2; break;
-            case Channel::A: c = nc == 2 ? 1 : 3; break;
+            case Channel::Auto:
+                c = nc <= 2 ? 0 : (nc >= 4 ? 3 : -1);
+                break;
+            case Channel::R:
+                c = 0;
+                break;
+            case Channel::G:
+                c = 1;
+                break;
+            case Channel::B:
+                c = 2;
+                break;
+            case Channel::A:
+                c = nc == 2 ? 1 : 3;
+                break;
         }
         if (c < 0)
             throw Error(subject + ": has " + std::to_string(nc) +
@@ -336,16 +358,20 @@ HeightField LoadHeightMapFile(const std::string& path, const MapLoadOptions& opt
             for (auto& v : img.values8) v = uint8_t(255 - v);
         hf = HeightFieldFromUnorm8(w, h, std::move(img.values8), path);
     } else {
-        // Validate as the file stores it, so a message shows the value that is in the file.
+        // Validate as the file stores it, so a message shows the value that is in the
+        // file.
         for (size_t k = 0; k < img.values.size(); ++k) {
             const float v = img.values[k];
             if (!std::isfinite(v) || v < 0.0f || v > 1.0f) {
                 std::ostringstream s;
                 s << subject << ": texel (" << k % size_t(w) << ", " << k / size_t(w)
                   << ") holds ";
-                if (std::isnan(v)) s << "NaN";
-                else if (std::isinf(v)) s << (v > 0 ? "+Inf" : "-Inf");
-                else s << v;
+                if (std::isnan(v))
+                    s << "NaN";
+                else if (std::isinf(v))
+                    s << (v > 0 ? "+Inf" : "-Inf");
+                else
+                    s << v;
                 s << " (as stored in the file); "
                   << (options.stores == Stores::Height ? "heights" : "depths")
                   << " must be finite (no NaN or Inf) and in [0, 1]";

@@ -1,4 +1,5 @@
-// Loading height maps (OpenImageIO lives only behind this header and texture/image_io.cpp).
+// Loading height maps (OpenImageIO lives only behind this header and
+// texture/image_io.cpp).
 #pragma once
 
 #include <cstdint>
@@ -23,8 +24,9 @@ std::optional<Stores> ParseStores(std::string_view s);
 
 /// How an image file becomes a HeightField.
 struct MapLoadOptions {
-    Channel channel = Channel::Auto;  ///< Auto: the grey channel of a 1-2 channel image, else A
-    Stores stores = Stores::Height;   ///< Height: white = top, depth = 1 - value
+    Channel channel =
+        Channel::Auto;  ///< Auto: the grey channel of a 1-2 channel image, else A
+    Stores stores = Stores::Height;  ///< Height: white = top, depth = 1 - value
 };
 
 /// Largest width or height of an image file that is read (llvmpipe's GL_MAX_TEXTURE_SIZE,
@@ -48,36 +50,37 @@ struct ImageData {
 /// read, or throws Error.
 using ChannelPicker = std::function<std::pair<int, int>(int fileChannels)>;
 
-/// Reads one image file, robustly: it must be a regular file (no directory, FIFO, device),
-/// opened once and decoded from memory; of a format in the documented list (PNG, TGA, TIFF,
-/// EXR, JPEG, BMP, HDR, PNM, WebP); with a header within kMaxImageSide per side and
-/// kMaxImageChannels, checked (and the memory it needs) before pixels are decoded; and
-/// decoded completely (a truncated or damaged file, even one the decoder "recovers", is
-/// refused). keep8: 8-bit files keep their codes in values8. Every failure is one Error
-/// line beginning with `subject` (e.g. `height map "rock.png"`); third-party decoder text
-/// printed to stderr meanwhile is folded into it.
+/// Reads one image file, robustly: it must be a regular file (no directory, FIFO,
+/// device), opened once and decoded from memory; of a format in the documented list (PNG,
+/// TGA, TIFF, EXR, JPEG, BMP, HDR, PNM, WebP); with a header within kMaxImageSide per
+/// side and kMaxImageChannels, checked (and the memory it needs) before pixels are
+/// decoded; and decoded completely (a truncated or damaged file, even one the decoder
+/// "recovers", is refused). keep8: 8-bit files keep their codes in values8. Every failure
+/// is one Error line beginning with `subject` (e.g. `height map "rock.png"`); third-party
+/// decoder text printed to stderr meanwhile is folded into it.
 ImageData ReadImageFile(const std::string& path, const std::string& subject,
                         const ChannelPicker& pickChannels, bool keep8);
 
 /// Loads PNG, TGA, EXR, TIFF (anything OpenImageIO reads; 8-bit, 16-bit or float).
-/// 8-bit sources keep their 8-bit depths (HeightField::depth8). Float values are validated
-/// (finite, in [0,1]). Throws Error naming the file on any problem.
+/// 8-bit sources keep their 8-bit depths (HeightField::depth8). Float values are
+/// validated (finite, in [0,1]). Throws Error naming the file on any problem.
 HeightField LoadHeightMapFile(const std::string& path, const MapLoadOptions& options);
 
 /// Loads "builtin:NAME[:SIZE]" or a file path.
 HeightField LoadHeightMap(const std::string& spec, const MapLoadOptions& options);
 
-/// Writes a float image (1..n channels, row-major, interleaved) to path; format by extension.
-/// Channel names are used for EXR. No time stamp is written: equal pixels give equal bytes.
-/// The file appears complete or not at all: written to a temporary beside `path` and
-/// renamed (core/output_set.h); with `outputs`, staged in that set until the caller commits
-/// it. Throws Error naming `path` on failure.
+/// Writes a float image (1..n channels, row-major, interleaved) to path; format by
+/// extension. Channel names are used for EXR. No time stamp is written: equal pixels give
+/// equal bytes. The file appears complete or not at all: written to a temporary beside
+/// `path` and renamed (core/output_set.h); with `outputs`, staged in that set until the
+/// caller commits it. Throws Error naming `path` on failure.
 void WriteFloatImage(const std::string& path, int width, int height, int channels,
-                     const float* pixels, const std::vector<std::string>& channelNames = {},
+                     const float* pixels,
+                     const std::vector<std::string>& channelNames = {},
                      OutputSet* outputs = nullptr);
 
-/// Writes 8-bit RGB(A) pixels (row-major, interleaved), like WriteFloatImage. Throws Error
-/// on failure.
+/// Writes 8-bit RGB(A) pixels (row-major, interleaved), like WriteFloatImage. Throws
+/// Error on failure.
 void WriteRgb8Image(const std::string& path, int width, int height, int channels,
                     const uint8_t* pixels, OutputSet* outputs = nullptr);
 

@@ -14,7 +14,7 @@ namespace reliefsim {
 
 namespace {
 constexpr uint64_t kMagic = 0x3170616d53455252ull;  // "RRESmap1"
-constexpr uint32_t kVersion = 1;                    // bump when a generator's output changes
+constexpr uint32_t kVersion = 1;  // bump when a generator's output changes
 
 uint64_t HashBytes(uint64_t h, const void* data, size_t n) {
     const auto* b = static_cast<const unsigned char*>(data);
@@ -59,7 +59,8 @@ std::string MapCache::PathFor(uint64_t key) const {
 std::optional<ConeMap> MapCache::Load(uint64_t key) const {
     std::ifstream f(PathFor(key), std::ios::binary);
     if (!f) return std::nullopt;
-    std::vector<char> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+    std::vector<char> bytes((std::istreambuf_iterator<char>(f)),
+                            std::istreambuf_iterator<char>());
     constexpr size_t kHeader = 8 + 4 + 8 + 4 * 4;
     if (bytes.size() < kHeader + 8) return std::nullopt;
     uint64_t magic, k, sum;
@@ -77,8 +78,8 @@ std::optional<ConeMap> MapCache::Load(uint64_t key) const {
     rd(&w, 4);
     rd(&h, 4);
     rd(&c, 4);
-    if (magic != kMagic || version != kVersion || k != key || w <= 0 || h <= 0 || c <= 0 ||
-        c > 16 || kind < 0 || kind > int(ConeKind::MaxMip))
+    if (magic != kMagic || version != kVersion || k != key || w <= 0 || h <= 0 ||
+        c <= 0 || c > 16 || kind < 0 || kind > int(ConeKind::MaxMip))
         return std::nullopt;
     const size_t payload = size_t(w) * size_t(h) * size_t(c) * sizeof(float);
     if (bytes.size() != kHeader + payload + 8) return std::nullopt;
@@ -116,7 +117,8 @@ void MapCache::Store(uint64_t key, const ConeMap& m) const {
                         "--cache-dir \"" + dir_ + "\"");
 }
 
-ConeMap MapCache::GetOrCreate(const HeightField& hf, ConeKind kind, const ConeMapParams& p,
+ConeMap MapCache::GetOrCreate(const HeightField& hf, ConeKind kind,
+                              const ConeMapParams& p,
                               const std::function<ConeMap()>& make, bool* hit) const {
     const uint64_t key = ConeMapCacheKey(hf, kind, p);
     if (auto m = Load(key); m && m->width == hf.width && m->height == hf.height) {

@@ -10,14 +10,16 @@
 
 namespace reliefsim {
 
-/// 64-bit key of (height field pixels, size, kind, every parameter that changes the result).
+/// 64-bit key of (height field pixels, size, kind, every parameter that changes the
+/// result).
 uint64_t ConeMapCacheKey(const HeightField& hf, ConeKind kind, const ConeMapParams& p);
 
 /// A cache directory. An entry is "<dir>/<key hex>.rsmap": magic, format version, key,
-/// kind, size, channels, payload, and a hash of all of it. Anything that does not check out
-/// (truncated, wrong key, wrong version, bad hash) is treated as absent and overwritten.
+/// kind, size, channels, payload, and a hash of all of it. Anything that does not check
+/// out (truncated, wrong key, wrong version, bad hash) is treated as absent and
+/// overwritten.
 class MapCache {
-public:
+  public:
     explicit MapCache(std::string dir) : dir_(std::move(dir)) {}
     std::string PathFor(uint64_t key) const;
     std::optional<ConeMap> Load(uint64_t key) const;
@@ -26,7 +28,7 @@ public:
     ConeMap GetOrCreate(const HeightField& hf, ConeKind kind, const ConeMapParams& p,
                         const std::function<ConeMap()>& make, bool* hit = nullptr) const;
 
-private:
+  private:
     std::string dir_;
 };
 

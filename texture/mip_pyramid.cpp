@@ -8,8 +8,8 @@
 
 namespace reliefsim {
 
-std::vector<MipLevel> BuildMipPyramid(const std::vector<float>& values, int width, int height,
-                                      int channels, MipReduce op) {
+std::vector<MipLevel> BuildMipPyramid(const std::vector<float>& values, int width,
+                                      int height, int channels, MipReduce op) {
     if (width <= 0 || height <= 0 || channels <= 0 ||
         values.size() != size_t(width) * size_t(height) * size_t(channels))
         throw Error("mip pyramid: bad size " + std::to_string(width) + "x" +
@@ -34,7 +34,8 @@ std::vector<MipLevel> BuildMipPyramid(const std::vector<float>& values, int widt
                         const float w = f.At(x, y, k);
                         v = op == MipReduce::Min ? std::min(v, w) : std::max(v, w);
                     }
-                    c.values[(size_t(j) * size_t(c.width) + size_t(i)) * size_t(channels) +
+                    c.values[(size_t(j) * size_t(c.width) + size_t(i)) *
+                                 size_t(channels) +
                              size_t(k)] = v;
                 }
         levels.push_back(std::move(c));

@@ -16,7 +16,8 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// shapes: four solids on a floor, like the classic "four shapes" relief tile. Height in [0,1].
+// shapes: four solids on a floor, like the classic "four shapes" relief tile. Height in
+// [0,1].
 double Shapes(double x, double y) {
     double h = 0.2;  // floor
     auto quadrant = [](double v, double c) { return v - c; };
@@ -80,7 +81,8 @@ double Noise(double x, double y) {
     double sum = 0.0, amp = 0.5, norm = 0.0;
     int period = 4;
     for (int octave = 0; octave < 6; ++octave) {
-        sum += amp * ValueNoise(x * period, y * period, period, 0x5EED0000ull + uint64_t(octave));
+        sum += amp * ValueNoise(x * period, y * period, period,
+                                0x5EED0000ull + uint64_t(octave));
         norm += amp;
         amp *= 0.5;
         period *= 2;
@@ -127,11 +129,12 @@ HeightField MakeBuiltinMap(std::string_view name, int width, int height) {
     auto it = std::find_if(Builtins().begin(), Builtins().end(),
                            [&](const Builtin& b) { return name == b.name; });
     if (it == Builtins().end())
-        throw Error("--map builtin:" + std::string(name) + ": unknown; must be one of: " +
-                    NameList());
+        throw Error("--map builtin:" + std::string(name) +
+                    ": unknown; must be one of: " + NameList());
     if (width < 1 || height < 1 || width > 16384 || height > 16384)
-        throw Error("--map builtin:" + std::string(name) + ": size " + std::to_string(width) +
-                    "x" + std::to_string(height) + " is outside [1, 16384]");
+        throw Error("--map builtin:" + std::string(name) + ": size " +
+                    std::to_string(width) + "x" + std::to_string(height) +
+                    " is outside [1, 16384]");
     HeightField hf;
     hf.width = width;
     hf.height = height;
@@ -154,7 +157,8 @@ HeightField MakeBuiltinMap(std::string_view spec) {
     if (auto colon = rest.find(':'); colon != std::string_view::npos) {
         name = rest.substr(0, colon);
         std::string_view num = rest.substr(colon + 1);
-        size = int(ParseIntInRange(num, 1, 16384, "--map " + std::string(spec) + ": size"));
+        size =
+            int(ParseIntInRange(num, 1, 16384, "--map " + std::string(spec) + ": size"));
     }
     return MakeBuiltinMap(name, size, size);
 }

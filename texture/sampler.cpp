@@ -5,19 +5,27 @@ namespace reliefsim {
 
 std::string_view ToString(Filter f) {
     switch (f) {
-        case Filter::Nearest: return "nearest";
-        case Filter::Bilinear: return "bilinear";
-        case Filter::Min4: return "min4";
+        case Filter::Nearest:
+            return "nearest";
+        case Filter::Bilinear:
+            return "bilinear";
+        case Filter::Min4:
+            return "min4";
     }
     return "?";
 }
-std::string_view ToString(WrapMode w) { return w == WrapMode::Clamp ? "clamp" : "repeat"; }
+std::string_view ToString(WrapMode w) {
+    return w == WrapMode::Clamp ? "clamp" : "repeat";
+}
 
 std::string_view ToString(Precision p) {
     switch (p) {
-        case Precision::Float: return "float";
-        case Precision::Llvmpipe8: return "llvmpipe8";
-        case Precision::Gpu8: return "gpu8";
+        case Precision::Float:
+            return "float";
+        case Precision::Llvmpipe8:
+            return "llvmpipe8";
+        case Precision::Gpu8:
+            return "gpu8";
     }
     return "?";
 }

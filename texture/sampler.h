@@ -4,10 +4,9 @@
 #include <climits>
 #include <cmath>
 #include <cstdint>
+#include <glm/vec2.hpp>
 #include <optional>
 #include <string_view>
-
-#include <glm/vec2.hpp>
 
 #include "core/error.h"
 #include "texture/height_field.h"
@@ -17,7 +16,8 @@ namespace reliefsim {
 enum class Filter {
     Nearest,   ///< GL_NEAREST: 1 texel
     Bilinear,  ///< GL_LINEAR: 4 texels, float weights (llvmpipe SoA path)
-    Min4,      ///< minimum over the bilinear footprint (GL_MIN reduction): conservative cone maps
+    Min4,  ///< minimum over the bilinear footprint (GL_MIN reduction): conservative cone
+           ///< maps
 };
 enum class WrapMode { Repeat, Clamp };
 /// The arithmetic of bilinear filtering (the Bilinear filter; Nearest and Min4 are exact
@@ -25,9 +25,11 @@ enum class WrapMode { Repeat, Clamp };
 enum class Precision {
     Float,      ///< float weights, fmaf lerps: llvmpipe's SoA path for R32F (§2.1)
     Llvmpipe8,  ///< llvmpipe's AoS 8.8 fixed-point path for 8-bit unorm textures (§2.2):
-                ///< 8-bit weights and 8-bit intermediate results; needs HeightField::depth8
+                ///< 8-bit weights and 8-bit intermediate results; needs
+                ///< HeightField::depth8
     Gpu8,       ///< GPU-spec: float texels, weights rounded to 8 subtexel bits (1/256),
-                ///< float fmaf lerps; for artifact studies (D3D-style 8-bit subtexel precision)
+                ///< float fmaf lerps; for artifact studies (D3D-style 8-bit subtexel
+                ///< precision)
 };
 
 std::string_view ToString(Filter f);
@@ -45,7 +47,8 @@ struct SamplerState {
     Precision precision = Precision::Float;
 };
 
-/// Per-lane counters. A fetch is one sampler call; a texel read one texel loaded from memory.
+/// Per-lane counters. A fetch is one sampler call; a texel read one texel loaded from
+/// memory.
 struct FetchCounts {
     uint32_t nFetches = 0;
     uint32_t nTexelReads = 0;
@@ -53,9 +56,9 @@ struct FetchCounts {
 
 namespace detail {
 
-/// min/max as SSE minss/maxss compute them (a < b ? a : b: the second operand when either is
-/// NaN), which is what llvmpipe's generated code does; unlike std::fmin these never become a
-/// libm call in the hot path.
+/// min/max as SSE minss/maxss compute them (a < b ? a : b: the second operand when either
+/// is NaN), which is what llvmpipe's generated code does; unlike std::fmin these never
+/// become a libm call in the hot path.
 RS_INLINE float MinSse(float a, float b) { return a < b ? a : b; }
 RS_INLINE float MaxSse(float a, float b) { return a > b ? a : b; }
 
@@ -66,7 +69,8 @@ RS_INLINE int TruncToInt(float f) {
 }
 inline bool IsPowerOfTwo(int n) { return n > 0 && (n & (n - 1)) == 0; }
 
-/// Texel indices and weight of one axis of a bilinear footprint (research/llvmpipe.md §2.1).
+/// Texel indices and weight of one axis of a bilinear footprint (research/llvmpipe.md
+/// §2.1).
 struct LinearAxis {
     int i0, i1;
     float w;  ///< weight of i1
@@ -131,7 +135,9 @@ inline FixedAxis WrapLinearFixed8(float u, int n, WrapMode wrap) {
     const int64_t i = s >> 8;  // arithmetic shift (C++20)
     a.w = int(s & 255);
     if (wrap == WrapMode::Clamp) {
-        auto clampIndex = [n](int64_t k) { return int(k < 0 ? 0 : (k > n - 1 ? n - 1 : k)); };
+        auto clampIndex = [n](int64_t k) {
+            return int(k < 0 ? 0 : (k > n - 1 ? n - 1 : k));
+        };
         a.i0 = clampIndex(i);
         a.i1 = clampIndex(i + 1);
     } else if (IsPowerOfTwo(n)) {
@@ -144,12 +150,16 @@ inline FixedAxis WrapLinearFixed8(float u, int n, WrapMode wrap) {
     return a;
 }
 
-/// llvmpipe's 8-bit lerp (lp_build_lerp_simple with pmulhrsw): a + floor((w (b - a) + 128)
-/// / 256), an 8-bit result.
-inline int Lerp8(int w, int a, int b) { return (a + ((w * (b - a) * 128 + 16384) >> 15)) & 255; }
+/// llvmpipe's 8-bit lerp (lp_build_lerp_simple with pmulhrsw): a + floor((w (b - a) +
+/// 128) / 256), an 8-bit result.
+inline int Lerp8(int w, int a, int b) {
+    return (a + ((w * (b - a) * 128 + 16384) >> 15)) & 255;
+}
 
 /// A float weight rounded to 8 subtexel bits (GPU-spec mode): nearest multiple of 1/256.
-inline float QuantizeWeight8(float w) { return std::nearbyint(w * 256.0f) * (1.0f / 256.0f); }
+inline float QuantizeWeight8(float w) {
+    return std::nearbyint(w * 256.0f) * (1.0f / 256.0f);
+}
 
 /// Texel index of a nearest lookup (research/llvmpipe.md §2.3).
 RS_INLINE int WrapNearest(float u, int n, WrapMode wrap) {
@@ -166,23 +176,26 @@ RS_INLINE int WrapNearest(float u, int n, WrapMode wrap) {
 
 }  // namespace detail
 
-/// Binds a HeightField, a SamplerState and (when kCount) a FetchCounts. Entry points mirror
-/// GLSL: Sample (by the state's filter), TexelFetch. Every texel read goes through Texel(),
-/// the one place that counts. Sampler<false> is the uncounted baseline for benchmarks.
-/// Kernels are templated on the sampler (kernels/kernel.h HeightSampler), so Sampler<true> and
-/// Sampler<false> run the same kernel body.
+/// Binds a HeightField, a SamplerState and (when kCount) a FetchCounts. Entry points
+/// mirror GLSL: Sample (by the state's filter), TexelFetch. Every texel read goes through
+/// Texel(), the one place that counts. Sampler<false> is the uncounted baseline for
+/// benchmarks. Kernels are templated on the sampler (kernels/kernel.h HeightSampler), so
+/// Sampler<true> and Sampler<false> run the same kernel body.
 template <bool kCount>
 class Sampler {
-public:
+  public:
     Sampler(const HeightField& field, SamplerState state, FetchCounts* counts = nullptr)
         : field_(&field), state_(state), counts_(counts) {}
 
     /// One fetch with the state's filter. Returns depth in [0,1].
     RS_INLINE float Sample(glm::vec2 uv) {
         switch (state_.filter) {
-            case Filter::Nearest: return SampleNearest(uv);
-            case Filter::Min4: return SampleMin4(uv);
-            case Filter::Bilinear: break;
+            case Filter::Nearest:
+                return SampleNearest(uv);
+            case Filter::Min4:
+                return SampleMin4(uv);
+            case Filter::Bilinear:
+                break;
         }
         return SampleBilinear(uv);
     }
@@ -194,9 +207,9 @@ public:
                      detail::WrapNearest(uv.y, field_->height, state_.wrap));
     }
 
-    /// One fetch, 4 texel reads. Float precision: x lerp then y lerp, each fmaf(w, b - a, a)
-    /// (llvmpipe §2.1). Llvmpipe8: the 8.8 fixed-point model of §2.2 on depth8. Gpu8: as
-    /// float with weights rounded to 1/256.
+    /// One fetch, 4 texel reads. Float precision: x lerp then y lerp, each fmaf(w, b - a,
+    /// a) (llvmpipe §2.1). Llvmpipe8: the 8.8 fixed-point model of §2.2 on depth8. Gpu8:
+    /// as float with weights rounded to 1/256.
     RS_INLINE float SampleBilinear(glm::vec2 uv) {
         if (state_.precision == Precision::Llvmpipe8) return SampleBilinearFixed8(uv);
         CountFetch();
@@ -214,7 +227,8 @@ public:
     }
 
     /// One fetch, 4 texel reads of depth8: llvmpipe's AoS fixed-point bilinear (§2.2).
-    /// Requires the field's depth8 (HeightField::depth8); callers validate that it is there.
+    /// Requires the field's depth8 (HeightField::depth8); callers validate that it is
+    /// there.
     float SampleBilinearFixed8(glm::vec2 uv) {
         CountFetch();
         detail::FixedAxis s = detail::WrapLinearFixed8(uv.x, field_->width, state_.wrap);
@@ -226,8 +240,8 @@ public:
         return Unorm8ToFloat(uint8_t(detail::Lerp8(t.w, r0, r1)));
     }
 
-    /// One fetch, 4 texel reads: the minimum over the bilinear footprint, ignoring texels whose
-    /// weight is exactly 0 (GL_MIN reduction as llvmpipe does it, §2.6).
+    /// One fetch, 4 texel reads: the minimum over the bilinear footprint, ignoring texels
+    /// whose weight is exactly 0 (GL_MIN reduction as llvmpipe does it, §2.6).
     RS_INLINE float SampleMin4(glm::vec2 uv) {
         CountFetch();
         detail::LinearAxis s = detail::WrapLinear(uv.x, field_->width, state_.wrap);
@@ -249,7 +263,7 @@ public:
     const SamplerState& State() const { return state_; }
     FetchCounts* Counts() const { return counts_; }
 
-private:
+  private:
     RS_INLINE void CountFetch() {
         if constexpr (kCount) ++counts_->nFetches;
     }

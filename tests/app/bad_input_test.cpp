@@ -1,7 +1,7 @@
-// Bad input across the commands, by class: every case gets one error line naming the culprit,
-// a non-zero exit, and leaves the output location exactly as it was (issue #8 §2).
+// Bad input across the commands, by class: every case gets one error line naming the
+// culprit, a non-zero exit, and leaves the output location exactly as it was (issue #8
+// §2).
 #include <gtest/gtest.h>
-
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -31,8 +31,6 @@ fs::path Scratch() { return reliefsim::testing::Scratch("rs_bad_"); }
 
 std::string Q(const fs::path& p) { return "'" + p.string() + "'"; }
 
-
-
 /// Runs a failing command and checks the contract: non-zero exit, exactly one line on
 /// stderr that contains every culprit string, nothing at `out` (when given), and no
 /// temporary or staging files left in the scratch folder.
@@ -43,8 +41,9 @@ void ExpectFailure(const std::string& args, const std::vector<std::string>& culp
     EXPECT_EQ(CountLines(r.err), 1) << args << "\n" << r.err;
     EXPECT_EQ(r.err.rfind("reliefsim: error: ", 0), 0u) << args << "\n" << r.err;
     for (const std::string& c : culprits)
-        EXPECT_NE(r.err.find(c), std::string::npos) << args << "\nexpected \"" << c << "\" in\n"
-                                                    << r.err;
+        EXPECT_NE(r.err.find(c), std::string::npos)
+            << args << "\nexpected \"" << c << "\" in\n"
+            << r.err;
     for (const char* internal : {"staging", ".tmp", "std::", "basic_string"})
         EXPECT_EQ(r.err.find(internal), std::string::npos) << args << "\n" << r.err;
     std::error_code ec;
@@ -59,13 +58,15 @@ void ExpectFailure(const std::string& args, const std::vector<std::string>& culp
 }
 
 /// Render with `args` into scratch/out, expected to fail naming `culprits`.
-void ExpectRenderFailure(const std::string& args, const std::vector<std::string>& culprits) {
+void ExpectRenderFailure(const std::string& args,
+                         const std::vector<std::string>& culprits) {
     fs::path d = reliefsim::testing::Scratch("rs_badrun_");
     fs::path out = d / "out";
     ExpectFailure("render " + args + " --size 32x32 --out " + Q(out), culprits, d, out);
 }
 
-// ---- Files that are not valid maps -------------------------------------------------------
+// ---- Files that are not valid maps
+// -------------------------------------------------------
 
 uint32_t Crc32(const std::string& bytes) {
     uint32_t c = 0xffffffffu;
@@ -86,15 +87,19 @@ std::string PngChunk(const std::string& type, const std::string& data) {
 
 /// A PNG of ~100 bytes whose header claims width x height (8-bit grey).
 std::string PngClaiming(uint32_t width, uint32_t height) {
-    std::string ihdr = Be32(width) + Be32(height) + std::string("\x08\x00\x00\x00\x00", 5);
+    std::string ihdr =
+        Be32(width) + Be32(height) + std::string("\x08\x00\x00\x00\x00", 5);
     // IDAT: a stored zlib block of a few zero bytes.
-    std::string idat("\x78\x01\x01\x05\x00\xfa\xff\x00\x00\x00\x00\x00\x00\x05\x00\x01", 16);
-    return std::string("\x89PNG\r\n\x1a\n", 8) + PngChunk("IHDR", ihdr) + PngChunk("IDAT", idat) +
-           PngChunk("IEND", "");
+    std::string idat("\x78\x01\x01\x05\x00\xfa\xff\x00\x00\x00\x00\x00\x00\x05\x00\x01",
+                     16);
+    return std::string("\x89PNG\r\n\x1a\n", 8) + PngChunk("IHDR", ihdr) +
+           PngChunk("IDAT", idat) + PngChunk("IEND", "");
 }
 
 std::string Le16(uint16_t v) { return {char(v), char(v >> 8)}; }
-std::string Le32(uint32_t v) { return {char(v), char(v >> 8), char(v >> 16), char(v >> 24)}; }
+std::string Le32(uint32_t v) {
+    return {char(v), char(v >> 8), char(v >> 16), char(v >> 24)};
+}
 
 /// A baseline little-endian TIFF, 8-bit grey, one uncompressed strip of `data`, with the
 /// strip offset and byte count as given (defaults: right after the IFD, data's size).
@@ -106,13 +111,20 @@ std::string Tiff(uint32_t w, uint32_t h, const std::string& data, int64_t offset
     };
     const uint32_t nEntries = 10, ifdSize = 2 + nEntries * 12 + 4;
     const uint32_t dataOffset = offset < 0 ? 8 + ifdSize : uint32_t(offset);
-    const Entry entries[] = {{256, 4, w},          {257, 4, h},   {258, 3, 8},
-                             {259, 3, 1},          {262, 3, 1},   {273, 4, dataOffset},
-                             {277, 3, 1},          {278, 4, h},
-                             {279, 4, count < 0 ? uint32_t(data.size()) : uint32_t(count)},
-                             {284, 3, 1}};
+    const Entry entries[] = {
+        {256, 4, w},
+        {257, 4, h},
+        {258, 3, 8},
+        {259, 3, 1},
+        {262, 3, 1},
+        {273, 4, dataOffset},
+        {277, 3, 1},
+        {278, 4, h},
+        {279, 4, count < 0 ? uint32_t(data.size()) : uint32_t(count)},
+        {284, 3, 1}};
     std::string s = std::string("II*\0", 4) + Le32(8) + Le16(uint16_t(nEntries));
-    for (const Entry& e : entries) s += Le16(e.tag) + Le16(e.type) + Le32(1) + Le32(e.value);
+    for (const Entry& e : entries)
+        s += Le16(e.tag) + Le16(e.type) + Le32(1) + Le32(e.value);
     return s + Le32(0) + data;
 }
 
@@ -135,7 +147,8 @@ TEST(BadInput, MissingDirectoryDeviceFifoAndEmptyFilesAreRefused) {
     ASSERT_EQ(::mkfifo((d / "pipe.png").c_str(), 0600), 0);
     fs::create_symlink("/dev/zero", d / "zero.png");
     const auto t0 = std::chrono::steady_clock::now();
-    ExpectRenderFailure("--map " + Q(d / "missing.png"), {"missing.png", "does not exist"});
+    ExpectRenderFailure("--map " + Q(d / "missing.png"),
+                        {"missing.png", "does not exist"});
     ExpectRenderFailure("--map " + Q(d / "adir.png"), {"adir.png", "is a directory"});
     ExpectRenderFailure("--map " + Q(d / "empty.png"), {"empty.png", "is empty"});
     ExpectRenderFailure("--map " + Q(d / "pipe.png"), {"pipe.png", "named pipe"});
@@ -164,7 +177,8 @@ TEST(BadInput, HeadersClaimingHugeSizesAreRefusedBeforeReading) {
     WriteBytes(d / "tall.png", PngClaiming(16, 16385));
     WriteBytes(d / "huge.tif", Tiff(70000, 70000, Ramp(64)));
     const auto t0 = std::chrono::steady_clock::now();
-    ExpectRenderFailure("--map " + Q(d / "huge.png"), {"huge.png", "100000x100000", "16384"});
+    ExpectRenderFailure("--map " + Q(d / "huge.png"),
+                        {"huge.png", "100000x100000", "16384"});
     ExpectRenderFailure("--map " + Q(d / "wide.png"), {"wide.png", "20000x16"});
     ExpectRenderFailure("--map " + Q(d / "tall.png"), {"tall.png", "16x16385"});
     ExpectRenderFailure("--map " + Q(d / "huge.tif"), {"huge.tif", "70000x70000"});
@@ -205,16 +219,15 @@ TEST(BadInput, TruncatedAndDamagedFilesAreRefusedOnOneLine) {
     // TIFFs whose strip is short, or whose data offset lies past the end of the file.
     const std::string data = Ramp(size_t(n) * n);
     WriteBytes(d / "good.tif", Tiff(n, n, data));
-    WriteBytes(d / "short.tif", Tiff(n, n, data.substr(0, data.size() - 100), -1,
-                                     int64_t(data.size())));
+    WriteBytes(d / "short.tif",
+               Tiff(n, n, data.substr(0, data.size() - 100), -1, int64_t(data.size())));
     WriteBytes(d / "offset.tif", Tiff(n, n, data, 100000));
     ExpectRenderFailure("--map " + Q(d / "short.tif"), {"short.tif", "truncated"});
     ExpectRenderFailure("--map " + Q(d / "offset.tif"), {"offset.tif", "truncated"});
     // The hand-made TIFF itself is fine (the cases above fail for the damage alone).
     fs::path out = d / "good_out";
-    CliResult r = RunCli("render --map " + Q(d / "good.tif") + " --size 16x16 --quiet --out " +
-                             Q(out),
-                         d);
+    CliResult r = RunCli(
+        "render --map " + Q(d / "good.tif") + " --size 16x16 --quiet --out " + Q(out), d);
     EXPECT_EQ(r.exitCode, 0) << r.err;
 }
 
@@ -235,26 +248,29 @@ TEST(BadInput, MapOptionsThatDoNotApplyAreRefused) {
     fs::path d = Scratch();
     std::vector<uint8_t> grey(16, 100);
     reliefsim::WriteRgb8Image((d / "g.png").string(), 4, 4, 1, grey.data());
-    ExpectRenderFailure("--map " + Q(d / "g.png") + " --map-channel B", {"g.png", "channel"});
+    ExpectRenderFailure("--map " + Q(d / "g.png") + " --map-channel B",
+                        {"g.png", "channel"});
     ExpectRenderFailure("--map builtin:shapes --map-channel A", {"--map-channel"});
     ExpectRenderFailure("--map builtin:shapes --map-stores depth", {"--map-stores"});
-    ExpectRenderFailure("--map " + Q(d / "g.png") + " --map-channel X", {"--map-channel"});
+    ExpectRenderFailure("--map " + Q(d / "g.png") + " --map-channel X",
+                        {"--map-channel"});
     ExpectRenderFailure("--map builtin:nope", {"nope", "shapes"});
     ExpectRenderFailure("--map builtin:shapes:0", {"builtin:shapes:0"});
-    ExpectRenderFailure("--map builtin:shapes:99999999999", {"99999999999", "out of range"});
+    ExpectRenderFailure("--map builtin:shapes:99999999999",
+                        {"99999999999", "out of range"});
     ExpectRenderFailure("--map builtin:shapes:12abc", {"12abc"});
 }
 
 // ---- Numbers -------------------------------------------------------------------------
 
 TEST(BadInput, SizesAreParsedWithRangeChecks) {
-    for (const char* size : {"4294967808x64", "64x4294967808", "0x64", "64x0", "-5x5", "64x",
-                             "x64", "x", "64x64x2", "1e3x5", "16385x16", " 64x64", "64X-1",
-                             "99999999999999999999x1"}) {
+    for (const char* size :
+         {"4294967808x64", "64x4294967808", "0x64", "64x0", "-5x5", "64x", "x64", "x",
+          "64x64x2", "1e3x5", "16385x16", " 64x64", "64X-1", "99999999999999999999x1"}) {
         fs::path d = Scratch();
         fs::path out = d / "out";
-        ExpectFailure(std::string("render --size '") + size + "' --out " + Q(out), {"--size"}, d,
-                      out);
+        ExpectFailure(std::string("render --size '") + size + "' --out " + Q(out),
+                      {"--size"}, d, out);
     }
 }
 
@@ -264,8 +280,9 @@ TEST(BadInput, FramesThatDoNotFitInMemoryAreRefusedBeforeWork) {
     // Under a 4 GiB address-space limit an 8192x8192 frame (about 7 GiB) is refused up
     // front, naming the option, what it needs and what is available.
     const std::string bin = std::string(RS_BINARY_DIR) + "/app/reliefsim";
-    const std::string cmd = "ulimit -v 4000000; exec " + bin + " render --size 8192x8192 --out " +
-                            Q(out) + " >" + Q(d / "o.txt") + " 2>" + Q(d / "e.txt");
+    const std::string cmd = "ulimit -v 4000000; exec " + bin +
+                            " render --size 8192x8192 --out " + Q(out) + " >" +
+                            Q(d / "o.txt") + " 2>" + Q(d / "e.txt");
     const int status = std::system(("bash -c \"" + cmd + "\"").c_str());
     EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) != 0);
     const std::string err = Slurp(d / "e.txt");
@@ -276,19 +293,21 @@ TEST(BadInput, FramesThatDoNotFitInMemoryAreRefusedBeforeWork) {
 }
 
 TEST(BadInput, PixelsAreParsedWithRangeChecks) {
-    for (const char* pixel : {"99999999999,1", "1,99999999999", "64,0", "0,64", "-1,0", "1",
-                              "a,b", "1,2,3", ",", "1,", ",1", "1.5,2"}) {
+    for (const char* pixel : {"99999999999,1", "1,99999999999", "64,0", "0,64", "-1,0",
+                              "1", "a,b", "1,2,3", ",", "1,", ",1", "1.5,2"}) {
         fs::path d = Scratch();
-        ExpectFailure(std::string("trace --size 64x64 --pixel '") + pixel + "'", {"--pixel"}, d);
+        ExpectFailure(std::string("trace --size 64x64 --pixel '") + pixel + "'",
+                      {"--pixel"}, d);
     }
 }
 
 TEST(BadInput, ScalesAreValidatedBeforeAnyWork) {
-    for (const char* scale : {"0:inf", "nan:1", "0:nan", "5:1", "1:1", "0:", ":", ":5", "a:b",
-                              "0:1e39", "-inf:0", "1:2:3"}) {
+    for (const char* scale : {"0:inf", "nan:1", "0:nan", "5:1", "1:1", "0:", ":", ":5",
+                              "a:b", "0:1e39", "-inf:0", "1:2:3"}) {
         ExpectRenderFailure(std::string("--iterations-scale '") + scale + "'",
                             {"--iterations-scale"});
-        ExpectRenderFailure(std::string("--fetches-scale '") + scale + "'", {"--fetches-scale"});
+        ExpectRenderFailure(std::string("--fetches-scale '") + scale + "'",
+                            {"--fetches-scale"});
     }
 }
 
@@ -311,10 +330,12 @@ TEST(BadInput, NumericOptionsOutOfRangeAreRefused) {
 }
 
 TEST(BadInput, KernelSettingsAreValidated) {
-    for (const char* set : {"linear_steps=99999999999", "linear_steps=1e400", "linear_steps=nan",
-                            "linear_steps=0", "linear_steps=2.5", "linear_steps=", "=5",
-                            "linear_steps", "frob=1", "linear_steps=0x10", "budget=-1"})
-        ExpectRenderFailure(std::string("--method relief --set '") + set + "'", {"--set"});
+    for (const char* set :
+         {"linear_steps=99999999999", "linear_steps=1e400", "linear_steps=nan",
+          "linear_steps=0", "linear_steps=2.5", "linear_steps=", "=5", "linear_steps",
+          "frob=1", "linear_steps=0x10", "budget=-1"})
+        ExpectRenderFailure(std::string("--method relief --set '") + set + "'",
+                            {"--set"});
 }
 
 TEST(BadInput, MapsOptionsThatDoNotApplyAreRefused) {
@@ -351,7 +372,8 @@ TEST(BadInput, MapsOptionsThatDoNotApplyAreRefused) {
     };
     for (const Case& c : cases) {
         fs::path d = Scratch();
-        ExpectFailure(std::string("maps --map builtin:shapes:16 ") + c.args, {c.culprit}, d);
+        ExpectFailure(std::string("maps --map builtin:shapes:16 ") + c.args, {c.culprit},
+                      d);
         EXPECT_FALSE(fs::exists(d / "m.exr")) << c.args;
         EXPECT_FALSE(fs::exists(d / "c")) << c.args;
     }
@@ -367,42 +389,49 @@ TEST(BadInput, OptionsOfOtherCommandsAreNotAccepted) {
 TEST(BadInput, OutputLocationsThatCannotHoldTheOutputsAreRefusedBeforeWork) {
     fs::path d = Scratch();
     WriteBytes(d / "file", "x");
-    ExpectFailure("render --size 8x8 --out " + Q(d / "file"), {"--out", "not a directory"}, d);
+    ExpectFailure("render --size 8x8 --out " + Q(d / "file"),
+                  {"--out", "not a directory"}, d);
     ExpectFailure("render --size 8x8 --out " + Q(d / "file" / "sub"), {"--out"}, d);
     ExpectFailure("render --size 8x8 --out " + Q(d / std::string(300, 'n')), {"--out"}, d,
                   d / std::string(300, 'n'));
     fs::create_directories(d / "res" / "metrics.json");
     WriteBytes(d / "res" / "mine.txt", "user data");
-    ExpectFailure("render --size 8x8 --out " + Q(d / "res"), {"--out", "metrics.json"}, d);
+    ExpectFailure("render --size 8x8 --out " + Q(d / "res"), {"--out", "metrics.json"},
+                  d);
     EXPECT_EQ(Slurp(d / "res" / "mine.txt"), "user data");
     EXPECT_FALSE(fs::exists(d / "res" / "color.png"));
-    ExpectFailure("maps --map builtin:shapes:16 --out " + Q(d / "file" / "m.exr"), {"--out"}, d);
+    ExpectFailure("maps --map builtin:shapes:16 --out " + Q(d / "file" / "m.exr"),
+                  {"--out"}, d);
     ExpectFailure("maps --map builtin:shapes:16 --out " + Q(d / "res"), {"--out"}, d);
 }
 
 TEST(BadInput, SummaryNamesTheFileAndRejectsWrongValues) {
     fs::path d = Scratch();
     fs::create_directories(d / "dir");
-    WriteBytes(d / "neg.json",
-               R"({"method":"relief","avg_iterations":1,"avg_fetches":1,"max_fetches":-1,"mse_paper":0})");
-    WriteBytes(d / "str.json",
-               R"({"method":"relief","avg_iterations":"x","avg_fetches":1,"max_fetches":1,"mse_paper":0})");
+    WriteBytes(
+        d / "neg.json",
+        R"({"method":"relief","avg_iterations":1,"avg_fetches":1,"max_fetches":-1,"mse_paper":0})");
+    WriteBytes(
+        d / "str.json",
+        R"({"method":"relief","avg_iterations":"x","avg_fetches":1,"max_fetches":1,"mse_paper":0})");
     WriteBytes(d / "nojson.json", "{not json");
     WriteBytes(d / "array.json", "[1,2]");
     WriteBytes(d / "partial.json", R"({"method":"relief"})");
     ExpectFailure("summary " + Q(d / "dir"), {"dir", "directory"}, d);
-    ExpectFailure("summary " + Q(d / "missing.json"), {"missing.json", "does not exist"}, d);
+    ExpectFailure("summary " + Q(d / "missing.json"), {"missing.json", "does not exist"},
+                  d);
     ExpectFailure("summary " + Q(d / "neg.json"), {"neg.json", "max_fetches", "-1"}, d);
     ExpectFailure("summary " + Q(d / "str.json"), {"str.json", "avg_iterations"}, d);
     ExpectFailure("summary " + Q(d / "nojson.json"), {"nojson.json", "not JSON"}, d);
     ExpectFailure("summary " + Q(d / "array.json"), {"array.json"}, d);
-    ExpectFailure("summary " + Q(d / "partial.json"), {"partial.json", "avg_iterations"}, d);
+    ExpectFailure("summary " + Q(d / "partial.json"), {"partial.json", "avg_iterations"},
+                  d);
     ExpectFailure("summary /dev/zero", {"/dev/zero", "not a regular file"}, d);
 }
 
 TEST(BadInput, UnknownCommandIsNamedWithTheCommandsThatExist) {
     fs::path d = Scratch();
-    ExpectFailure("frobnicate", {"\"frobnicate\"", "unknown command", "render", "maps", "trace"},
-                  d);
+    ExpectFailure("frobnicate",
+                  {"\"frobnicate\"", "unknown command", "render", "maps", "trace"}, d);
     ExpectFailure("frobnicate --help", {"frobnicate"}, d);
 }

@@ -1,4 +1,5 @@
-// The command line: help, methods, and bad input (one error line, non-zero exit, no output).
+// The command line: help, methods, and bad input (one error line, non-zero exit, no
+// output).
 #include <gtest/gtest.h>
 
 #include <array>
@@ -36,8 +37,8 @@ void ExpectCleanFailure(const std::string& args, const std::string& culprit) {
 
 TEST(Cli, HelpOnEveryCommand) {
     fs::path d = Scratch();
-    for (const char* cmd : {"--help", "methods --help", "render --help", "summary --help", "trace --help",
-                            "maps --help"}) {
+    for (const char* cmd : {"--help", "methods --help", "render --help", "summary --help",
+                            "trace --help", "maps --help"}) {
         Result r = RunCli(cmd, d);
         EXPECT_EQ(r.exitCode, 0) << cmd;
         EXPECT_NE(r.out.find("Usage"), std::string::npos) << cmd;
@@ -54,9 +55,10 @@ TEST(Cli, MethodsListsParametersWithRanges) {
 
 TEST(Cli, RenderWritesTheFiveOutputs) {
     fs::path d = Scratch();
-    Result r = RunCli("render --map builtin:shapes:64 --method relief --size 64x48 --out " +
-                          (d / "o").string(),
-                      d);
+    Result r =
+        RunCli("render --map builtin:shapes:64 --method relief --size 64x48 --out " +
+                   (d / "o").string(),
+               d);
     ASSERT_EQ(r.exitCode, 0) << r.err;
     for (const char* name :
          {"color.png", "iterations.png", "fetches.png", "record.exr", "metrics.json"})
@@ -65,9 +67,10 @@ TEST(Cli, RenderWritesTheFiveOutputs) {
 
 TEST(Cli, TracePrintsEveryFetchOfThePixel) {
     fs::path d = Scratch();
-    Result r = RunCli("trace --map builtin:flat:16 --method relief --size 32x32 --view-angle 0 "
-                      "--set linear_steps=8 --set refine_steps=3 --pixel 16,16",
-                      d);
+    Result r = RunCli(
+        "trace --map builtin:flat:16 --method relief --size 32x32 --view-angle 0 "
+        "--set linear_steps=8 --set refine_steps=3 --pixel 16,16",
+        d);
     ASSERT_EQ(r.exitCode, 0) << r.err;
     // flat at depth 0.5: samples t = 0..4/8 (5), then 3 binary steps
     EXPECT_NE(r.out.find("8 fetches"), std::string::npos) << r.out;
@@ -86,14 +89,16 @@ TEST(Cli, ParseErrorsAreOneLine) {
 }
 
 TEST(Cli, MissingFile) {
-    ExpectCleanFailure("render --map /nonexistent/height.png --method relief", "height.png");
+    ExpectCleanFailure("render --map /nonexistent/height.png --method relief",
+                       "height.png");
 }
 
 TEST(Cli, CorruptFile) {
     fs::path d = Scratch();
     fs::path bad = d.parent_path() / "rs_cli_corrupt.png";
     std::ofstream(bad) << "\x89PNG garbage";
-    ExpectCleanFailure("render --map " + bad.string() + " --method relief", "rs_cli_corrupt.png");
+    ExpectCleanFailure("render --map " + bad.string() + " --method relief",
+                       "rs_cli_corrupt.png");
 }
 
 TEST(Cli, ZeroSizeImage) {
@@ -102,8 +107,10 @@ TEST(Cli, ZeroSizeImage) {
     std::array<unsigned char, 18> header{};  // uncompressed grey TGA, 0x0 pixels, 8 bits
     header[2] = 3;
     header[16] = 8;
-    std::ofstream(zero, std::ios::binary).write(reinterpret_cast<char*>(header.data()), 18);
-    ExpectCleanFailure("render --map " + zero.string() + " --method relief", "rs_cli_zero.tga");
+    std::ofstream(zero, std::ios::binary)
+        .write(reinterpret_cast<char*>(header.data()), 18);
+    ExpectCleanFailure("render --map " + zero.string() + " --method relief",
+                       "rs_cli_zero.tga");
 }
 
 TEST(Cli, NanHeights) {
@@ -119,8 +126,9 @@ TEST(Cli, UnknownMethod) {
 }
 
 TEST(Cli, NegativeSteps) {
-    ExpectCleanFailure("render --map builtin:shapes:32 --method relief --set linear_steps=-3",
-                       "linear_steps");
+    ExpectCleanFailure(
+        "render --map builtin:shapes:32 --method relief --set linear_steps=-3",
+        "linear_steps");
 }
 
 TEST(Cli, NonPositiveDepthScale) {
@@ -138,5 +146,6 @@ TEST(Cli, ViewAngleOutsideRange) {
 }
 
 TEST(Cli, BadSize) {
-    ExpectCleanFailure("render --map builtin:shapes:32 --method relief --size 0x10", "--size");
+    ExpectCleanFailure("render --map builtin:shapes:32 --method relief --size 0x10",
+                       "--size");
 }

@@ -1,9 +1,8 @@
-// Helpers for tests that run the reliefsim binary: a scratch folder per test, the command's
-// exit code and its captured stdout and stderr.
+// Helpers for tests that run the reliefsim binary: a scratch folder per test, the
+// command's exit code and its captured stdout and stderr.
 #pragma once
 
 #include <gtest/gtest.h>
-
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -30,6 +29,8 @@ inline CliResult RunCli(const std::string& args, const std::filesystem::path& sc
     return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, Slurp(out), Slurp(err)};
 }
 
-inline int CountLines(const std::string& s) { return int(std::count(s.begin(), s.end(), '\n')); }
+inline int CountLines(const std::string& s) {
+    return int(std::count(s.begin(), s.end(), '\n'));
+}
 
 }  // namespace reliefsim::testing

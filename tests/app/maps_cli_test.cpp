@@ -1,5 +1,5 @@
-// `reliefsim maps`: outputs (map, stats JSON), cache, animate, and bad input (non-zero exit, one
-// stderr line naming the culprit, nothing written).
+// `reliefsim maps`: outputs (map, stats JSON), cache, animate, and bad input (non-zero
+// exit, one stderr line naming the culprit, nothing written).
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -22,13 +22,14 @@ using Result = reliefsim::testing::CliResult;
 
 fs::path Scratch() { return reliefsim::testing::Scratch("rs_maps_cli_"); }
 
-/// Runs `maps ARGS --out <scratch>/out/m.EXT` and expects a clean failure naming `culprit`,
-/// with neither the map, its statistics nor the output folder written.
+/// Runs `maps ARGS --out <scratch>/out/m.EXT` and expects a clean failure naming
+/// `culprit`, with neither the map, its statistics nor the output folder written.
 void ExpectCleanFailure(const std::string& args, const std::string& culprit,
                         const std::string& ext = ".exr") {
     const fs::path d = Scratch();
     const fs::path outDir = d / "out";
-    const Result r = RunCli("maps " + args + " --out " + (outDir / ("m" + ext)).string(), d);
+    const Result r =
+        RunCli("maps " + args + " --out " + (outDir / ("m" + ext)).string(), d);
     EXPECT_NE(r.exitCode, 0) << args;
     EXPECT_EQ(CountLines(r.err), 1) << args << "\n" << r.err;
     EXPECT_NE(r.err.find(culprit), std::string::npos) << args << "\n" << r.err;
@@ -40,12 +41,14 @@ void ExpectCleanFailure(const std::string& args, const std::string& culprit,
 TEST(MapsCli, WritesMapAndStatisticsIntoANewFolder) {
     const fs::path d = Scratch();
     const fs::path out = d / "new" / "acm.exr";
-    const Result r =
-        RunCli("maps --map builtin:shapes:32 --kind acm4 --encoding u8 --out " + out.string(), d);
+    const Result r = RunCli(
+        "maps --map builtin:shapes:32 --kind acm4 --encoding u8 --out " + out.string(),
+        d);
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_TRUE(fs::exists(out));
     const std::string json = Slurp(d / "new" / "acm.stats.json");
-    for (const char* key : {"\"kind\": \"acm4\"", "\"encoding\": \"u8\"", "\"histogram\"", "\"mean\""})
+    for (const char* key :
+         {"\"kind\": \"acm4\"", "\"encoding\": \"u8\"", "\"histogram\"", "\"mean\""})
         EXPECT_NE(json.find(key), std::string::npos) << key << "\n" << json;
     EXPECT_NE(r.out.find("acm4 32x32 x4"), std::string::npos) << r.out;
     // Not a terminal: no progress bar on stderr.
@@ -62,14 +65,17 @@ TEST(MapsCli, PngAndEveryKindRun) {
     const fs::path d = Scratch();
     for (const char* kind : {"cone", "relaxed", "relaxed-exact", "quad", "acm4", "acm8",
                              "cone-normal", "stacked", "minmip", "maxmip"}) {
-        // stacked has more channels than a PNG holds; the pyramids are one MIP-mapped EXR.
+        // stacked has more channels than a PNG holds; the pyramids are one MIP-mapped
+        // EXR.
         const std::string k = kind;
-        const std::string ext = k == "stacked" || k == "minmip" || k == "maxmip" ? ".exr" : ".png";
+        const std::string ext =
+            k == "stacked" || k == "minmip" || k == "maxmip" ? ".exr" : ".png";
         const fs::path out = d / (std::string(kind) + ext);
         // --search-steps applies to the relaxed kind only (elsewhere it is refused).
-        const std::string steps = std::string(kind) == "relaxed" ? "--search-steps 16 " : "";
-        const Result r = RunCli("maps --map builtin:bumps:16 " + steps + "--kind " + kind +
-                                    " --out " + out.string(),
+        const std::string steps =
+            std::string(kind) == "relaxed" ? "--search-steps 16 " : "";
+        const Result r = RunCli("maps --map builtin:bumps:16 " + steps + "--kind " +
+                                    kind + " --out " + out.string(),
                                 d);
         EXPECT_EQ(r.exitCode, 0) << kind << "\n" << r.err;
     }
@@ -79,22 +85,27 @@ TEST(MapsCli, PngAndEveryKindRun) {
 }
 
 TEST(MapsCli, RelaxedStackedAndConeNormal) {
-    // --relaxed switches stacked and cone-normal to the Listing's relaxed cones: the stacked
-    // map's first channel is then the relaxed map.
+    // --relaxed switches stacked and cone-normal to the Listing's relaxed cones: the
+    // stacked map's first channel is then the relaxed map.
     const fs::path d = Scratch();
     const std::string base = "maps --map builtin:shapes:24 --search-steps 32 ";
-    ASSERT_EQ(RunCli(base + "--kind relaxed --out " + (d / "r.exr").string(), d).exitCode, 0);
+    ASSERT_EQ(RunCli(base + "--kind relaxed --out " + (d / "r.exr").string(), d).exitCode,
+              0);
     const Result st = RunCli(base + "--kind stacked --stacked-count 3 --relaxed --out " +
-                                 (d / "s.exr").string(), d);
+                                 (d / "s.exr").string(),
+                             d);
     ASSERT_EQ(st.exitCode, 0) << st.err;
     EXPECT_NE(st.out.find("stacked 24x24 x3"), std::string::npos) << st.out;
     reliefsim::MapLoadOptions lo;
     lo.channel = reliefsim::Channel::R;
     lo.stores = reliefsim::Stores::Depth;
-    const reliefsim::HeightField r = reliefsim::LoadHeightMapFile((d / "r.exr").string(), lo);
-    const reliefsim::HeightField s0 = reliefsim::LoadHeightMapFile((d / "s.exr").string(), lo);
+    const reliefsim::HeightField r =
+        reliefsim::LoadHeightMapFile((d / "r.exr").string(), lo);
+    const reliefsim::HeightField s0 =
+        reliefsim::LoadHeightMapFile((d / "s.exr").string(), lo);
     EXPECT_EQ(r.depth, s0.depth);
-    const Result cn = RunCli(base + "--kind cone-normal --relaxed --out " + (d / "n.exr").string(), d);
+    const Result cn =
+        RunCli(base + "--kind cone-normal --relaxed --out " + (d / "n.exr").string(), d);
     EXPECT_EQ(cn.exitCode, 0) << cn.err;
 }
 
@@ -104,7 +115,8 @@ TEST(MapsCli, RelaxedFlagOnAnotherKind) {
 
 TEST(MapsCli, CacheMissThenHit) {
     const fs::path d = Scratch();
-    const std::string args = "maps --map builtin:shapes:32 --kind quad --cache-dir " + (d / "c").string();
+    const std::string args =
+        "maps --map builtin:shapes:32 --kind quad --cache-dir " + (d / "c").string();
     const Result a = RunCli(args, d);
     ASSERT_EQ(a.exitCode, 0) << a.err;
     EXPECT_NE(a.out.find("cache: miss"), std::string::npos) << a.out;
@@ -122,20 +134,26 @@ TEST(MapsCli, AnimateReportsPerFrameTimes) {
     EXPECT_NE(r.out.find("animate: 3 frames, mean"), std::string::npos) << r.out;
 }
 
-TEST(MapsCli, UnknownKind) { ExpectCleanFailure("--map builtin:shapes:16 --kind cones", "--kind \"cones\""); }
+TEST(MapsCli, UnknownKind) {
+    ExpectCleanFailure("--map builtin:shapes:16 --kind cones", "--kind \"cones\"");
+}
 
 TEST(MapsCli, UnknownEncoding) {
     ExpectCleanFailure("--map builtin:shapes:16 --encoding u7", "--encoding \"u7\"");
 }
 
-TEST(MapsCli, BadOutputExtension) { ExpectCleanFailure("--map builtin:shapes:16", "m.jpg", ".jpg"); }
+TEST(MapsCli, BadOutputExtension) {
+    ExpectCleanFailure("--map builtin:shapes:16", "m.jpg", ".jpg");
+}
 
 TEST(MapsCli, TooManyChannelsForPng) {
-    ExpectCleanFailure("--map builtin:shapes:16 --kind stacked --stacked-count 6", "stacked", ".png");
+    ExpectCleanFailure("--map builtin:shapes:16 --kind stacked --stacked-count 6",
+                       "stacked", ".png");
 }
 
 TEST(MapsCli, SearchStepsOutOfRange) {
-    ExpectCleanFailure("--map builtin:shapes:16 --kind relaxed --search-steps 0", "--search-steps");
+    ExpectCleanFailure("--map builtin:shapes:16 --kind relaxed --search-steps 0",
+                       "--search-steps");
 }
 
 TEST(MapsCli, MissingMapFile) {
@@ -165,5 +183,6 @@ TEST(MapsCli, ExternalMapOfTheWrongSize) {
     const fs::path ext = d.parent_path() / "rs_maps_cli_ext16.png";
     std::vector<uint8_t> px(16 * 16 * 4, 100);
     reliefsim::WriteRgb8Image(ext.string(), 16, 16, 4, px.data());
-    ExpectCleanFailure("--map builtin:shapes:32 --external " + ext.string(), "rs_maps_cli_ext16.png");
+    ExpectCleanFailure("--map builtin:shapes:32 --external " + ext.string(),
+                       "rs_maps_cli_ext16.png");
 }

@@ -56,8 +56,6 @@ Result RunShell(const std::string& prefix, const std::string& args,
     return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, Slurp(out), Slurp(err)};
 }
 
-
-
 /// A failed run: non-zero exit, one error line that names `culprit`.
 void ExpectOneLineFailure(const Result& r, const std::string& culprit) {
     EXPECT_NE(r.exitCode, 0);

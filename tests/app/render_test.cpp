@@ -56,7 +56,8 @@ TEST(Render, IdenticalForOneAndTwoThreadsAndReruns) {
         ExpectSameRecord(one.record, two.record);
         ExpectSameRecord(two.record, again.record);
         EXPECT_EQ(one.color, two.color) << method;
-        EXPECT_EQ(WithoutTiming(MetricsJson(one, s, f)), WithoutTiming(MetricsJson(two, s, f)))
+        EXPECT_EQ(WithoutTiming(MetricsJson(one, s, f)),
+                  WithoutTiming(MetricsJson(two, s, f)))
             << method;
         EXPECT_GT(one.summary.coveredPixels, 1000u);
     }
@@ -107,16 +108,18 @@ TEST(Render, WritesAllOutputsWithContractKeys) {
     std::ifstream in(dir / "metrics.json");
     nlohmann::json j;
     in >> j;
-    for (const char* key : {"method", "params", "width", "height", "covered_pixels",
-                            "avg_iterations", "avg_fetches", "max_fetches", "total_fetches",
-                            "budget_exhausted_pixels", "mse_paper", "timing"})
+    for (const char* key :
+         {"method", "params", "width", "height", "covered_pixels", "avg_iterations",
+          "avg_fetches", "max_fetches", "total_fetches", "budget_exhausted_pixels",
+          "mse_paper", "timing"})
         EXPECT_TRUE(j.contains(key)) << key;
     EXPECT_EQ(j["params"]["linear_steps"], 32);
     EXPECT_EQ(j["covered_pixels"], out.summary.coveredPixels);
     // no temporary (".NAME.rs-XXXXXX") left beside the outputs or their folder
     for (const fs::path& d : {dir, dir.parent_path()})
         for (const auto& e : fs::directory_iterator(d))
-            EXPECT_EQ(e.path().filename().string().find(".rs-"), std::string::npos) << e.path();
+            EXPECT_EQ(e.path().filename().string().find(".rs-"), std::string::npos)
+                << e.path();
 }
 
 TEST(Render, InvalidSettingsThrowBeforeRendering) {

@@ -1,10 +1,9 @@
 // Test helpers for files: a scratch folder per test, whole-file reads and writes, and for
-// "the output location is exactly as it was", a snapshot of a folder tree and a check that
-// no temporary, backup or staging entry was left in it.
+// "the output location is exactly as it was", a snapshot of a folder tree and a check
+// that no temporary, backup or staging entry was left in it.
 #pragma once
 
 #include <gtest/gtest.h>
-
 #include <sys/stat.h>
 
 #include <filesystem>
@@ -17,8 +16,9 @@ namespace reliefsim::testing {
 /// An empty folder named PREFIX + the running test's name, under the GoogleTest temp dir.
 inline std::filesystem::path Scratch(const std::string& prefix) {
     namespace fs = std::filesystem;
-    fs::path p = fs::path(::testing::TempDir()) /
-                 (prefix + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::path p =
+        fs::path(::testing::TempDir()) /
+        (prefix + ::testing::UnitTest::GetInstance()->current_test_info()->name());
     fs::remove_all(p);
     fs::create_directories(p);
     return p;
@@ -45,9 +45,10 @@ inline std::map<std::string, std::string> Snapshot(const std::filesystem::path& 
     for (const auto& e : fs::recursive_directory_iterator(dir)) {
         struct stat st;
         EXPECT_EQ(::lstat(e.path().c_str(), &st), 0);
-        std::string v = std::to_string(st.st_mode) + " " + std::to_string(st.st_size) + " " +
-                        std::to_string(st.st_mtim.tv_sec) + "." +
-                        std::to_string(st.st_mtim.tv_nsec) + " " + std::to_string(st.st_ino);
+        std::string v = std::to_string(st.st_mode) + " " + std::to_string(st.st_size) +
+                        " " + std::to_string(st.st_mtim.tv_sec) + "." +
+                        std::to_string(st.st_mtim.tv_nsec) + " " +
+                        std::to_string(st.st_ino);
         if (S_ISREG(st.st_mode)) v += " " + Slurp(e.path());
         out[fs::relative(e.path(), dir).string()] = v;
     }

@@ -27,10 +27,7 @@ namespace {
 
 fs::path Scratch() { return reliefsim::testing::Scratch("rs_output_set_"); }
 
-
-
 /// Everything under `dir`: per relative path, its type, mode, size, mtime, inode and
-
 
 std::string ErrorOf(const std::function<void()>& f) {
     try {

@@ -1,5 +1,7 @@
 // The GLSL twins on llvmpipe agree with the C++ frame loop bit for bit, and the lane-cost
 // model equals the trips llvmpipe executes (issue #4).
+#include "app/glcompare.h"
+
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -7,7 +9,6 @@
 #include <string>
 #include <tuple>
 
-#include "app/glcompare.h"
 #include "core/error.h"
 #include "metrics/record_compare.h"
 #include "texture/image_io.h"
@@ -37,7 +38,8 @@ void PrintTo(const Case& c, std::ostream* os) {
 
 HeightField LoadField(const std::string& map, TextureFormat format) {
     HeightField f = LoadHeightMap(map, MapLoadOptions{});
-    if (format == TextureFormat::R8 && f.depth8.size() != f.depth.size()) f = QuantizeToUnorm8(f);
+    if (format == TextureFormat::R8 && f.depth8.size() != f.depth.size())
+        f = QuantizeToUnorm8(f);
     return f;
 }
 
@@ -79,8 +81,8 @@ std::vector<Case> AllCases() {
     std::vector<Case> cases;
     for (TextureFormat format : {TextureFormat::R32F, TextureFormat::R8})
         for (int size : {256, 512})
-            for (const char* map : {"builtin:shapes", "builtin:bumps", "builtin:steps",
-                                    "builtin:noise"})
+            for (const char* map :
+                 {"builtin:shapes", "builtin:bumps", "builtin:steps", "builtin:noise"})
                 for (const MethodInfo& m : Methods())
                     cases.push_back({m.name, map, size, format});
     return cases;
@@ -107,28 +109,93 @@ TEST(GlCompare, SamplerModesParametersAndViewsAreBitIdentical) {
         int width, height;
     };
     const std::vector<Variant> variants = {
-        {"builtin:noise", Filter::Nearest, WrapMode::Repeat, TextureFormat::R32F, {}, 45, 0, 1,
-         128, 128},
-        {"builtin:noise", Filter::Min4, WrapMode::Repeat, TextureFormat::R32F, {}, 45, 0, 1,
-         128, 128},
-        {"builtin:bumps", Filter::Bilinear, WrapMode::Clamp, TextureFormat::R32F, {}, 45, 0, 1,
-         128, 128},
-        {"builtin:steps", Filter::Bilinear, WrapMode::Repeat, TextureFormat::R32F,
-         {"early_exit=0"}, 45, 0, 1, 128, 128},
-        {"builtin:noise", Filter::Bilinear, WrapMode::Repeat, TextureFormat::R32F,
-         {"budget=7"}, 45, 0, 1, 128, 128},
-        {"builtin:noise:100", Filter::Bilinear, WrapMode::Repeat, TextureFormat::R32F, {}, 70,
-         33, 3, 160, 120},
-        {"builtin:shapes:100", Filter::Bilinear, WrapMode::Clamp, TextureFormat::R8, {}, 60,
-         120, 1, 150, 100},
-        {"builtin:bumps:100", Filter::Nearest, WrapMode::Repeat, TextureFormat::R8, {}, 30, 200,
-         2, 128, 128},
+        {"builtin:noise",
+         Filter::Nearest,
+         WrapMode::Repeat,
+         TextureFormat::R32F,
+         {},
+         45,
+         0,
+         1,
+         128,
+         128},
+        {"builtin:noise",
+         Filter::Min4,
+         WrapMode::Repeat,
+         TextureFormat::R32F,
+         {},
+         45,
+         0,
+         1,
+         128,
+         128},
+        {"builtin:bumps",
+         Filter::Bilinear,
+         WrapMode::Clamp,
+         TextureFormat::R32F,
+         {},
+         45,
+         0,
+         1,
+         128,
+         128},
+        {"builtin:steps",
+         Filter::Bilinear,
+         WrapMode::Repeat,
+         TextureFormat::R32F,
+         {"early_exit=0"},
+         45,
+         0,
+         1,
+         128,
+         128},
+        {"builtin:noise",
+         Filter::Bilinear,
+         WrapMode::Repeat,
+         TextureFormat::R32F,
+         {"budget=7"},
+         45,
+         0,
+         1,
+         128,
+         128},
+        {"builtin:noise:100",
+         Filter::Bilinear,
+         WrapMode::Repeat,
+         TextureFormat::R32F,
+         {},
+         70,
+         33,
+         3,
+         160,
+         120},
+        {"builtin:shapes:100",
+         Filter::Bilinear,
+         WrapMode::Clamp,
+         TextureFormat::R8,
+         {},
+         60,
+         120,
+         1,
+         150,
+         100},
+        {"builtin:bumps:100",
+         Filter::Nearest,
+         WrapMode::Repeat,
+         TextureFormat::R8,
+         {},
+         30,
+         200,
+         2,
+         128,
+         128},
     };
     for (const MethodInfo& m : Methods()) {
         for (const Variant& v : variants) {
-            SCOPED_TRACE(m.name + " on " + v.map + " filter " + std::string(ToString(v.filter)) +
-                         " wrap " + std::string(ToString(v.wrap)) + " " +
-                         std::string(ToString(v.format)) + (v.set.empty() ? "" : " " + v.set[0]));
+            SCOPED_TRACE(
+                m.name + " on " + v.map + " filter " + std::string(ToString(v.filter)) +
+                " wrap " + std::string(ToString(v.wrap)) + " " +
+                std::string(ToString(v.format)) + (v.set.empty() ? "" : " " + v.set[0]));
             RenderSettings s;
             s.method = m.name;
             s.set = v.set;
@@ -147,8 +214,8 @@ TEST(GlCompare, SamplerModesParametersAndViewsAreBitIdentical) {
 }
 
 TEST(GlCompare, DetectsASamplerMismatch) {
-    // The C++ side filters the 8-bit field in float while llvmpipe uses 8.8 fixed point: the
-    // comparison must see it (it is not vacuous).
+    // The C++ side filters the 8-bit field in float while llvmpipe uses 8.8 fixed point:
+    // the comparison must see it (it is not vacuous).
     HeightField field = LoadField("builtin:shapes", TextureFormat::R8);
     RenderSettings s;
     s.width = s.height = 128;
@@ -187,8 +254,9 @@ TEST(GlCompare, TraceCommandReproducesTheScene) {
     o.textureFormat = "r8";
     ResolveRenderSettings(o);
     const std::string cmd = TraceCommand(o, 3, 4);
-    for (const char* part : {"reliefsim glcompare", "--method secant", "--set refine_steps=4",
-                             "--size 64x32", "--texture-format r8", "--trace-pixel 3,4"})
+    for (const char* part :
+         {"reliefsim glcompare", "--method secant", "--set refine_steps=4",
+          "--size 64x32", "--texture-format r8", "--trace-pixel 3,4"})
         EXPECT_NE(cmd.find(part), std::string::npos) << part << " in " << cmd;
 }
 

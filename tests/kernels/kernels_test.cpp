@@ -37,15 +37,15 @@ struct MarchRun {
 };
 
 MarchRun March(const LinearSearchKernel& k, const HeightField& f, MarchInput in,
-          SamplerState st = {}) {
+               SamplerState st = {}) {
     MarchRun r;
     Sampler<true> s(f, st, &r.counts);
     r.result = k.March(in, s);
     return r;
 }
 
-// Ray over the ramp field depth(u) = u (bilinear, clamp; exact for u in [0.5/W, 1 - 0.5/W]):
-// u(t) = u0 + dx t meets it at t* = u0 / (1 - dx).
+// Ray over the ramp field depth(u) = u (bilinear, clamp; exact for u in [0.5/W, 1 -
+// 0.5/W]): u(t) = u0 + dx t meets it at t* = u0 / (1 - dx).
 constexpr SamplerState kClampBilinear{Filter::Bilinear, WrapMode::Clamp};
 
 }  // namespace
@@ -66,7 +66,8 @@ TEST(LinearSearch, FlatPlaneHitsAtItsDepth) {
 TEST(LinearSearch, MapNeverHitCostsExactlyNFetches) {
     HeightField f = Constant(1.0f);  // the bottom: samples stop at t = (N-1)/N
     for (int n : {1, 5, 32, 100}) {
-        MarchRun r = March(Kernel(Refinement::None, n, 0), f, {{0.1f, 0.1f}, {0.3f, 0.2f}});
+        MarchRun r =
+            March(Kernel(Refinement::None, n, 0), f, {{0.1f, 0.1f}, {0.3f, 0.2f}});
         EXPECT_FALSE(r.result.hit);
         EXPECT_EQ(r.counts.nFetches, uint32_t(n));
         EXPECT_EQ(r.result.nCoarse, n);
@@ -89,20 +90,23 @@ TEST(LinearSearch, FixedLoopsFetchEveryStepButLatchTheHit) {
 
 TEST(LinearSearch, BudgetStopsAndFlags) {
     HeightField f = Constant(0.9f);
-    MarchRun r = March(Kernel(Refinement::Binary, 32, 6, true, 10), f, {{0.2f, 0.2f}, {0.1f, 0.0f}});
+    MarchRun r = March(Kernel(Refinement::Binary, 32, 6, true, 10), f,
+                       {{0.2f, 0.2f}, {0.1f, 0.0f}});
     EXPECT_TRUE(r.result.budgetExhausted);
     EXPECT_EQ(r.counts.nFetches, 10u);
     EXPECT_EQ(r.result.nCoarse, 10);
     EXPECT_FALSE(r.result.hit);
     // A budget that is never reached flags nothing.
-    MarchRun ok = March(Kernel(Refinement::Binary, 32, 6, true, 1000), f, {{0.2f, 0.2f}, {0.1f, 0.0f}});
+    MarchRun ok = March(Kernel(Refinement::Binary, 32, 6, true, 1000), f,
+                        {{0.2f, 0.2f}, {0.1f, 0.0f}});
     EXPECT_FALSE(ok.result.budgetExhausted);
     EXPECT_EQ(ok.counts.nFetches, 30u + 6u);  // hit at t = 29/32 (30 samples) + 6 binary
 }
 
 TEST(LinearSearch, HitAtTopIsExactWithoutRefinement) {
     HeightField f = Constant(0.0f);
-    MarchRun r = March(Kernel(Refinement::Binary, 32, 6), f, {{0.2f, 0.2f}, {0.4f, 0.1f}});
+    MarchRun r =
+        March(Kernel(Refinement::Binary, 32, 6), f, {{0.2f, 0.2f}, {0.4f, 0.1f}});
     EXPECT_TRUE(r.result.hit);
     EXPECT_EQ(r.result.depthHit, 0.0f);
     EXPECT_EQ(r.counts.nFetches, 1u);
@@ -112,7 +116,8 @@ TEST(LinearSearch, HitAtTopIsExactWithoutRefinement) {
 TEST(Relief, FlatPlaneErrorBoundedByBisection) {
     HeightField f = Constant(0.53f);
     for (int refine : {0, 1, 2, 4, 8}) {
-        MarchRun r = March(Kernel(Refinement::Binary, 16, refine), f, {{0.3f, 0.3f}, {0.2f, 0.2f}});
+        MarchRun r = March(Kernel(Refinement::Binary, 16, refine), f,
+                           {{0.3f, 0.3f}, {0.2f, 0.2f}});
         float bound = (1.0f / 16.0f) / float(1 << (refine + 1));
         EXPECT_LE(std::fabs(r.result.depthHit - 0.53f), bound) << refine;
         EXPECT_EQ(r.result.nRefine, refine);
@@ -139,8 +144,8 @@ TEST(Relief, ErrorHalvesPerBinaryStep) {
             float u0 = 0.3f + 0.6f * float(k) / 500.0f;
             float dx = -0.25f - 0.1f * float(k % 7) / 7.0f;
             double tStar = double(u0) / (1.0 - double(dx));
-            MarchRun r = March(Kernel(Refinement::Binary, 16, refine), f, {{u0, 0.5f}, {dx, 0.0f}},
-                          kClampBilinear);
+            MarchRun r = March(Kernel(Refinement::Binary, 16, refine), f,
+                               {{u0, 0.5f}, {dx, 0.0f}}, kClampBilinear);
             sum += std::fabs(double(r.result.depthHit) - tStar);
             ++n;
         }
@@ -188,7 +193,8 @@ TEST(Secant, ConvergesWithinToleranceAndStops) {
         // the returned point sits on the surface within the tolerance...
         Sampler<false> s(f, {});
         EXPECT_LE(std::fabs(s.Sample(r.result.uvHit) - r.result.depthHit), 2e-3f);
-        // ...and, starting from the same linear bracket, on the same crossing as a dense march
+        // ...and, starting from the same linear bracket, on the same crossing as a dense
+        // march
         EXPECT_NEAR(r.result.depthHit, ref.result.depthHit, 1.0f / 32.0f);
     }
     EXPECT_GT(converged, 150);  // early termination is the point of the method
@@ -196,14 +202,16 @@ TEST(Secant, ConvergesWithinToleranceAndStops) {
 
 TEST(Secant, FlatPlaneConvergesInOneIteration) {
     HeightField f = Constant(0.4f);
-    MarchRun r = March(Kernel(Refinement::Secant, 10, 10), f, {{0.5f, 0.5f}, {0.3f, 0.0f}});
+    MarchRun r =
+        March(Kernel(Refinement::Secant, 10, 10), f, {{0.5f, 0.5f}, {0.3f, 0.0f}});
     EXPECT_EQ(r.result.nRefine, 1);
     EXPECT_NEAR(r.result.depthHit, 0.4f, 1e-6f);
 }
 
 TEST(LinearSearch, StepEdgeHitsTheWall) {
-    // depth 0.2 for u < 0.5, 0.8 beyond; ray from u = 0.6 towards -u: the wall at u = 0.5 is
-    // reached at t = 0.2, where the depth there (0.2) is already below the ray: hit = 0.2.
+    // depth 0.2 for u < 0.5, 0.8 beyond; ray from u = 0.6 towards -u: the wall at u = 0.5
+    // is reached at t = 0.2, where the depth there (0.2) is already below the ray: hit =
+    // 0.2.
     HeightField f = MakeBuiltinMap("step", 256, 4);
     MarchInput in{{0.6f, 0.5f}, {-0.5f, 0.0f}};
     SamplerState nearest{Filter::Nearest, WrapMode::Clamp};
@@ -226,10 +234,10 @@ TEST(LinearSearch, GrazingRaysTerminateFinite) {
 }
 
 TEST(ViewRay, StraightDownRayHasNoSlope) {
-    // View angle 0: the eye straight above the plane's centre, looking down (-z). The centre
-    // pixel of an odd-sized image has ndc (0, 0) exactly, so its ray is the forward vector:
-    // dirUv must vanish (tolerance 1e-7, far below one texel of any map) and the ray enters
-    // at the plane's centre.
+    // View angle 0: the eye straight above the plane's centre, looking down (-z). The
+    // centre pixel of an odd-sized image has ndc (0, 0) exactly, so its ray is the
+    // forward vector: dirUv must vanish (tolerance 1e-7, far below one texel of any map)
+    // and the ray enters at the plane's centre.
     for (int n : {1, 3, 257}) {
         ViewUniforms u;
         u.eye = {0.0f, 0.0f, 2.0f};
@@ -256,9 +264,9 @@ TEST(ViewRay, CornerPixelSlopeIsMinusXyOverZTimesDepthScale) {
     u.width = u.height = 2.0f;
     u.tiling = 1.0f;
     u.depthScale = 0.1f;
-    MarchInput in = PixelToRay(u, 1, 0);  // right column, top row: ndc (0.5, 0.5)
+    MarchInput in = PixelToRay(u, 1, 0);         // right column, top row: ndc (0.5, 0.5)
     EXPECT_FLOAT_EQ(in.uvEntry.x, 0.5f + 0.5f);  // x = 2 * 0.25 = 0.5 -> u = 1.0
     EXPECT_FLOAT_EQ(in.uvEntry.y, 0.5f - 0.5f);  // y = 0.5 -> v = 0
-    EXPECT_FLOAT_EQ(in.dirUv.x, 0.25f * 0.1f);   // -dx/dz * depthScale, dx = 0.25, dz = -1
+    EXPECT_FLOAT_EQ(in.dirUv.x, 0.25f * 0.1f);  // -dx/dz * depthScale, dx = 0.25, dz = -1
     EXPECT_FLOAT_EQ(in.dirUv.y, -0.25f * 0.1f);
 }

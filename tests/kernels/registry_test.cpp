@@ -1,8 +1,9 @@
 // The method registry: names, parameter validation, kernel construction.
+#include "kernels/registry.h"
+
 #include <gtest/gtest.h>
 
 #include "core/error.h"
-#include "kernels/registry.h"
 
 using namespace reliefsim;
 

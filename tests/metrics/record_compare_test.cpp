@@ -1,4 +1,6 @@
 // Record comparison and the lane-cost check on constructed data (no EGL, no GL).
+#include "metrics/record_compare.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -6,7 +8,6 @@
 #include <vector>
 
 #include "core/error.h"
-#include "metrics/record_compare.h"
 
 namespace reliefsim {
 namespace {
@@ -125,13 +126,14 @@ TEST(RecordCompare, SizesDifferIsAnError) {
         CompareRecords(a, b);
         ADD_FAILURE() << "expected an Error";
     } catch (const Error& e) {
-        EXPECT_NE(std::string(e.what()).find("4x2 vs 4x3"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("4x2 vs 4x3"), std::string::npos)
+            << e.what();
     }
 }
 
 // An 8x2 frame: two 4x2 blocks, two triangles. Block 0 is all triangle 0; block 1 has
-// triangle 0 in columns 4-5 and triangle 1 in columns 6-7, with pixel (7, 1) uncovered (its
-// large fetch count must not count).
+// triangle 0 in columns 4-5 and triangle 1 in columns 6-7, with pixel (7, 1) uncovered
+// (its large fetch count must not count).
 struct LaneFrame {
     int width = 8, height = 2;
     std::vector<uint32_t> fetches = {3, 5, 2, 7, 1, 4, 6, 2,  //
@@ -171,7 +173,8 @@ TEST(LaneCost, MismatchedGroupIsCountedAndListed) {
     const LaneFrame f;
     LaneTrips measured = f.Measured();
     measured.groupTrips[3] = 8;  // block (1, 0), triangle 1: model 6
-    const LaneCostCheck c = CheckLaneCost(f.fetches, f.triangle, f.width, f.height, measured, 0);
+    const LaneCostCheck c =
+        CheckLaneCost(f.fetches, f.triangle, f.width, f.height, measured, 0);
     EXPECT_FALSE(c.Equal());
     EXPECT_EQ(c.groupsMismatched, 1u);
     EXPECT_EQ(c.modelLaneFetches, 8u * 22u);
@@ -187,7 +190,8 @@ TEST(LaneCost, MismatchedGroupIsCountedAndListed) {
     // A group run the model does not have (a block split once more) is a count mismatch.
     LaneTrips extraRun = f.Measured();
     extraRun.groupRuns = 4;
-    const LaneCostCheck d = CheckLaneCost(f.fetches, f.triangle, f.width, f.height, extraRun, 0);
+    const LaneCostCheck d =
+        CheckLaneCost(f.fetches, f.triangle, f.width, f.height, extraRun, 0);
     EXPECT_EQ(d.groupsMismatched, 0u);
     EXPECT_FALSE(d.Equal());
 }
@@ -196,10 +200,12 @@ TEST(LaneCost, GroupOutsideTheMeasurementIsAnError) {
     const LaneFrame f;
     LaneTrips small = f.Measured();
     small.groupTrips.resize(3);  // (block 1, triangle 1) is missing
-    EXPECT_THROW(CheckLaneCost(f.fetches, f.triangle, f.width, f.height, small, 0), Error);
-    std::vector<uint32_t> shortFetches(4, 0);
-    EXPECT_THROW(CheckLaneCost(shortFetches, f.triangle, f.width, f.height, f.Measured(), 0),
+    EXPECT_THROW(CheckLaneCost(f.fetches, f.triangle, f.width, f.height, small, 0),
                  Error);
+    std::vector<uint32_t> shortFetches(4, 0);
+    EXPECT_THROW(
+        CheckLaneCost(shortFetches, f.triangle, f.width, f.height, f.Measured(), 0),
+        Error);
 }
 
 }  // namespace

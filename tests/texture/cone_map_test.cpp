@@ -1,5 +1,5 @@
-// Cone-map generators: fast == brute force bit for bit, conservativeness, encodings, adaptive,
-// safety pass, cache, mip pyramids, bad input.
+// Cone-map generators: fast == brute force bit for bit, conservativeness, encodings,
+// adaptive, safety pass, cache, mip pyramids, bad input.
 #include "texture/cone_map.h"
 
 #include <gtest/gtest.h>
@@ -30,10 +30,12 @@ HeightField RandomField(int w, int h, uint64_t seed, bool smooth) {
     hf.depth.resize(size_t(w) * size_t(h));
     for (int j = 0; j < h; ++j)
         for (int i = 0; i < w; ++i) {
-            const uint64_t r = Mix64(seed * 1000003ull + uint64_t(j) * uint64_t(w) + uint64_t(i));
+            const uint64_t r =
+                Mix64(seed * 1000003ull + uint64_t(j) * uint64_t(w) + uint64_t(i));
             float v = float(r >> 40) * (1.0f / 16777216.0f);
             if (smooth) {  // blobs: mostly flat regions with some random texels on top
-                v = (v < 0.9f) ? 0.5f + 0.4f * std::sin(float(i) * 0.3f) * std::cos(float(j) * 0.2f)
+                v = (v < 0.9f) ? 0.5f + 0.4f * std::sin(float(i) * 0.3f) *
+                                            std::cos(float(j) * 0.2f)
                                : v * 0.5f;
                 v = std::clamp(v, 0.0f, 1.0f);
             }
@@ -51,7 +53,8 @@ void ExpectBitEqual(const ConeMap& a, const ConeMap& b, const std::string& what)
             ++bad;
         }
     EXPECT_EQ(bad, 0u) << what << ": first mismatch at value " << first << ": "
-                       << (bad ? a.values[first] : 0.0f) << " vs " << (bad ? b.values[first] : 0.0f);
+                       << (bad ? a.values[first] : 0.0f) << " vs "
+                       << (bad ? b.values[first] : 0.0f);
 }
 
 std::vector<HeightField> Fields(int n) {
@@ -67,8 +70,9 @@ std::vector<HeightField> Fields(int n) {
 
 TEST(ConeMap, FastEqualsBruteForceAt32) {
     for (const HeightField& hf : Fields(32))
-        for (ConeKind k : {ConeKind::Cone, ConeKind::Quad, ConeKind::Acm4, ConeKind::Acm8,
-                           ConeKind::RelaxedExact, ConeKind::Stacked, ConeKind::ConeNormal})
+        for (ConeKind k :
+             {ConeKind::Cone, ConeKind::Quad, ConeKind::Acm4, ConeKind::Acm8,
+              ConeKind::RelaxedExact, ConeKind::Stacked, ConeKind::ConeNormal})
             ExpectBitEqual(GenerateConeMap(hf, k), GenerateConeMapBruteForce(hf, k),
                            hf.name + " " + std::string(ToString(k)));
 }
@@ -82,28 +86,33 @@ TEST(ConeMap, FastEqualsBruteForceAt64) {
 
 TEST(ConeMap, FastEqualsBruteForceAt128) {
     const HeightField a = QuantizeToUnorm8(MakeBuiltinMap("shapes", 128, 128));
-    ExpectBitEqual(GenerateConeMap(a, ConeKind::Cone), GenerateConeMapBruteForce(a, ConeKind::Cone),
-                   "shapes 8-bit 128");
+    ExpectBitEqual(GenerateConeMap(a, ConeKind::Cone),
+                   GenerateConeMapBruteForce(a, ConeKind::Cone), "shapes 8-bit 128");
     const HeightField b = RandomField(128, 128, 11, true);
-    ExpectBitEqual(GenerateConeMap(b, ConeKind::Quad), GenerateConeMapBruteForce(b, ConeKind::Quad),
-                   "random float 128 quad");
+    ExpectBitEqual(GenerateConeMap(b, ConeKind::Quad),
+                   GenerateConeMapBruteForce(b, ConeKind::Quad), "random float 128 quad");
 }
 
 TEST(ConeMap, NonSquareAndOddSizesMatchBruteForce) {
-    for (auto [w, h] : {std::pair{24, 40}, std::pair{33, 17}, std::pair{1, 9}, std::pair{5, 5}}) {
+    for (auto [w, h] :
+         {std::pair{24, 40}, std::pair{33, 17}, std::pair{1, 9}, std::pair{5, 5}}) {
         const HeightField hf = RandomField(w, h, 3, true);
-        for (ConeKind k : {ConeKind::Cone, ConeKind::Acm8, ConeKind::Quad, ConeKind::RelaxedExact})
+        for (ConeKind k :
+             {ConeKind::Cone, ConeKind::Acm8, ConeKind::Quad, ConeKind::RelaxedExact})
             ExpectBitEqual(GenerateConeMap(hf, k), GenerateConeMapBruteForce(hf, k),
-                           std::to_string(w) + "x" + std::to_string(h) + " " + std::string(ToString(k)));
+                           std::to_string(w) + "x" + std::to_string(h) + " " +
+                               std::string(ToString(k)));
         ExpectBitEqual(GenerateConeMap(QuantizeToUnorm8(hf), ConeKind::Cone),
-                       GenerateConeMapBruteForce(QuantizeToUnorm8(hf), ConeKind::Cone), "8-bit levels");
+                       GenerateConeMapBruteForce(QuantizeToUnorm8(hf), ConeKind::Cone),
+                       "8-bit levels");
     }
 }
 
 TEST(ConeMap, LevelsPathOnWideRowsMatchesPlainSearch) {
-    // Rows of several 64-texel segments (the levels path builds the row envelope only around
-    // segments with texels left to improve): equal to the exact plain search, which the
-    // brute-force tests cover. Non-square sizes exercise the weighted geometry and wrap.
+    // Rows of several 64-texel segments (the levels path builds the row envelope only
+    // around segments with texels left to improve): equal to the exact plain search,
+    // which the brute-force tests cover. Non-square sizes exercise the weighted geometry
+    // and wrap.
     for (auto [w, h] : {std::pair{512, 40}, std::pair{300, 64}, std::pair{256, 256}}) {
         for (const HeightField& hf : {QuantizeToUnorm8(MakeBuiltinMap("shapes", w, h)),
                                       QuantizeToUnorm8(RandomField(w, h, 13, true))})
@@ -116,22 +125,25 @@ TEST(ConeMap, LevelsPathOnWideRowsMatchesPlainSearch) {
 TEST(ConeMap, RelaxedFastEqualsListingBruteForce) {
     ConeMapParams p;
     p.searchSteps = 32;
-    for (const HeightField& hf : {MakeBuiltinMap("shapes", 32, 32), RandomField(32, 32, 5, true),
-                                  QuantizeToUnorm8(MakeBuiltinMap("bumps", 24, 24))})
-        ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed, p),
-                       GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p), hf.name + " relaxed");
-    p.searchSteps = 128;
     for (const HeightField& hf :
-         {MakeBuiltinMap("steps", 32, 32), QuantizeToUnorm8(MakeBuiltinMap("shapes", 48, 48)),
-          RandomField(40, 40, 6, false), QuantizeToUnorm8(MakeBuiltinMap("noise", 40, 40)),
-          RandomField(36, 20, 12, true)})
+         {MakeBuiltinMap("shapes", 32, 32), RandomField(32, 32, 5, true),
+          QuantizeToUnorm8(MakeBuiltinMap("bumps", 24, 24))})
+        ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed, p),
+                       GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p),
+                       hf.name + " relaxed");
+    p.searchSteps = 128;
+    for (const HeightField& hf : {MakeBuiltinMap("steps", 32, 32),
+                                  QuantizeToUnorm8(MakeBuiltinMap("shapes", 48, 48)),
+                                  RandomField(40, 40, 6, false),
+                                  QuantizeToUnorm8(MakeBuiltinMap("noise", 40, 40)),
+                                  RandomField(36, 20, 12, true)})
         ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed, p),
                        GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p),
                        hf.name + " relaxed 128 " + std::to_string(hf.width));
 }
 
-/// A plateau at depth 0.5 with a few deeper and higher texels: most nearest deeper cells lie
-/// beyond the exit field's search window, whose edge then bounds the march.
+/// A plateau at depth 0.5 with a few deeper and higher texels: most nearest deeper cells
+/// lie beyond the exit field's search window, whose edge then bounds the march.
 HeightField PlateauField(int n) {
     HeightField hf;
     hf.width = hf.height = n;
@@ -145,8 +157,8 @@ HeightField PlateauField(int n) {
 }
 
 TEST(ConeMap, RelaxedFastEqualsListingBruteForceAt64And128) {
-    // The sizes with the Listing's 128 steps: every built-in, float and 8-bit, at 64²;
-    // an 8-bit built-in and a random float map at 128².
+    // The sizes with the Listing's 128 steps: every built-in, float and 8-bit, at
+    // 64²; an 8-bit built-in and a random float map at 128².
     for (const char* name : {"shapes", "bumps", "steps", "noise"})
         for (bool q : {false, true}) {
             const HeightField f = MakeBuiltinMap(name, 64, 64);
@@ -158,18 +170,21 @@ TEST(ConeMap, RelaxedFastEqualsListingBruteForceAt64And128) {
     for (const HeightField& hf : {QuantizeToUnorm8(MakeBuiltinMap("shapes", 128, 128)),
                                   RandomField(128, 128, 31, true)})
         ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed),
-                       GenerateConeMapBruteForce(hf, ConeKind::Relaxed), hf.name + " 128");
+                       GenerateConeMapBruteForce(hf, ConeKind::Relaxed),
+                       hf.name + " 128");
 }
 
 TEST(ConeMap, RelaxedVariantsMatchTheirBruteForce) {
-    // Every path of the pruned relaxed search against the listing evaluated for every pair:
-    // steps not a power of two (divisions), 1 step (no loop), 4096 steps, the window edge of
-    // the exit field (plateau), zero depths (the listing's NaN), stacked and cone-normal output.
+    // Every path of the pruned relaxed search against the listing evaluated for every
+    // pair: steps not a power of two (divisions), 1 step (no loop), 4096 steps, the
+    // window edge of the exit field (plateau), zero depths (the listing's NaN), stacked
+    // and cone-normal output.
     ConeMapParams p;
     for (int steps : {37, 1, 4096}) {
         p.searchSteps = steps;
-        const HeightField hf = steps == 4096 ? QuantizeToUnorm8(MakeBuiltinMap("shapes", 16, 16))
-                                             : QuantizeToUnorm8(MakeBuiltinMap("noise", 24, 24));
+        const HeightField hf = steps == 4096
+                                   ? QuantizeToUnorm8(MakeBuiltinMap("shapes", 16, 16))
+                                   : QuantizeToUnorm8(MakeBuiltinMap("noise", 24, 24));
         ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed, p),
                        GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p),
                        "relaxed steps " + std::to_string(steps));
@@ -192,24 +207,24 @@ TEST(ConeMap, RelaxedVariantsMatchTheirBruteForce) {
 }
 
 TEST(ConeMap, RelaxedSearchWithoutExitFieldMatchesBruteForce) {
-    // Large maps with many steps (e.g. > 2040 texels a side at 4096 steps) search without the
-    // exit-field bound; the same code path, forced on small maps.
+    // Large maps with many steps (e.g. > 2040 texels a side at 4096 steps) search without
+    // the exit-field bound; the same code path, forced on small maps.
     ConeMapParams p;
     p.searchSteps = 64;
     for (const HeightField& hf : {QuantizeToUnorm8(MakeBuiltinMap("shapes", 40, 40)),
                                   RandomField(32, 24, 17, true)}) {
         const ConeMap brute = GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p);
-        ExpectBitEqual(detail::RelaxedListingMap(hf, p, false, ConeKind::Relaxed, false), brute,
-                       hf.name + " without exit field");
-        ExpectBitEqual(detail::RelaxedListingMap(hf, p, false, ConeKind::Relaxed, true), brute,
-                       hf.name + " with exit field");
+        ExpectBitEqual(detail::RelaxedListingMap(hf, p, false, ConeKind::Relaxed, false),
+                       brute, hf.name + " without exit field");
+        ExpectBitEqual(detail::RelaxedListingMap(hf, p, false, ConeKind::Relaxed, true),
+                       brute, hf.name + " with exit field");
     }
 }
 
 TEST(ConeMap, StackedRelaxedChannelsWidenUpwards) {
-    // Channel 0 (apex on the surface) is the relaxed map itself; a higher apex (channel k)
-    // sees fewer destinations above it and a shorter height to every exit point, so its
-    // ratio is never smaller.
+    // Channel 0 (apex on the surface) is the relaxed map itself; a higher apex (channel
+    // k) sees fewer destinations above it and a shorter height to every exit point, so
+    // its ratio is never smaller.
     const HeightField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 48, 48));
     ConeMapParams p;
     p.relaxed = true;
@@ -221,7 +236,8 @@ TEST(ConeMap, StackedRelaxedChannelsWidenUpwards) {
         for (int i = 0; i < hf.width; ++i) {
             ASSERT_EQ(st.At(i, j, 0), rel.At(i, j)) << i << "," << j;
             for (int c = 1; c < 4; ++c) {
-                ASSERT_GE(st.At(i, j, c), st.At(i, j, c - 1)) << i << "," << j << " cone " << c;
+                ASSERT_GE(st.At(i, j, c), st.At(i, j, c - 1))
+                    << i << "," << j << " cone " << c;
                 widened += st.At(i, j, c) > st.At(i, j, c - 1);
             }
         }
@@ -229,20 +245,23 @@ TEST(ConeMap, StackedRelaxedChannelsWidenUpwards) {
 }
 
 TEST(ConeMap, RelaxedIsNeverNarrowerThanConservative) {
-    // A destination is a texel above the apex and the listing's exit point lies beyond it and
-    // deeper, so every relaxed ratio is at least the conservative bound of that texel.
+    // A destination is a texel above the apex and the listing's exit point lies beyond it
+    // and deeper, so every relaxed ratio is at least the conservative bound of that
+    // texel.
     for (const HeightField& hf : {QuantizeToUnorm8(MakeBuiltinMap("bumps", 64, 64)),
                                   RandomField(40, 40, 3, true)}) {
         const ConeMap cone = GenerateConeMap(hf, ConeKind::Cone);
         const ConeMap rel = GenerateConeMap(hf, ConeKind::Relaxed);
         for (size_t t = 0; t < cone.values.size(); ++t)
-            ASSERT_GE(rel.values[t], std::min(cone.values[t], 1.0f)) << hf.name << " texel " << t;
+            ASSERT_GE(rel.values[t], std::min(cone.values[t], 1.0f))
+                << hf.name << " texel " << t;
     }
 }
 
 TEST(ConeMap, ProgressIsReportedInGrowingWholePercents) {
-    // The levels path, the tiled search and the relaxed search each report up to 100 growing
-    // fractions ending at 1; the map does not depend on whether progress is reported.
+    // The levels path, the tiled search and the relaxed search each report up to 100
+    // growing fractions ending at 1; the map does not depend on whether progress is
+    // reported.
     const HeightField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 96, 96));
     for (ConeKind k : {ConeKind::Cone, ConeKind::Acm4, ConeKind::Relaxed}) {
         std::vector<double> seen;
@@ -251,25 +270,30 @@ TEST(ConeMap, ProgressIsReportedInGrowingWholePercents) {
         p.progress = [&](double f) { seen.push_back(f); };  // serialised by the generator
         const ConeMap with = GenerateConeMap(hf, k, p);
         p.progress = nullptr;
-        ExpectBitEqual(with, GenerateConeMap(hf, k, p), std::string(ToString(k)) + " progress");
+        ExpectBitEqual(with, GenerateConeMap(hf, k, p),
+                       std::string(ToString(k)) + " progress");
         ASSERT_FALSE(seen.empty()) << ToString(k);
         EXPECT_LE(seen.size(), 100u) << ToString(k);
         EXPECT_EQ(seen.back(), 1.0) << ToString(k);
-        for (size_t i = 1; i < seen.size(); ++i) EXPECT_GT(seen[i], seen[i - 1]) << ToString(k);
+        for (size_t i = 1; i < seen.size(); ++i)
+            EXPECT_GT(seen[i], seen[i - 1]) << ToString(k);
     }
 }
 
 TEST(ConeMap, RelaxedWorkedExampleOfTheDocs) {
-    // docs/cone_maps.md, "Worked example: relaxed vs relaxed-exact": a 16x16 map whose depth
-    // depends on the column only; apex texel i = 1.
+    // docs/cone_maps.md, "Worked example: relaxed vs relaxed-exact": a 16x16 map whose
+    // depth depends on the column only; apex texel i = 1.
     HeightField hf;
     hf.width = hf.height = 16;
     hf.name = "example";
-    const float col[16] = {0.75f, 0.75f, 0.5f, 0.25f, 0.25f, 0.25f, 0.25f, 1, 1, 1, 1, 1, 1, 1, 1, 0.75f};
+    const float col[16] = {0.75f, 0.75f, 0.5f, 0.25f, 0.25f, 0.25f, 0.25f, 1,
+                           1,     1,     1,    1,     1,     1,     1,     0.75f};
     for (int j = 0; j < 16; ++j)
         for (int i = 0; i < 16; ++i) hf.depth.push_back(col[i]);
-    EXPECT_FLOAT_EQ(GenerateConeMap(hf, ConeKind::Cone).At(1, 5), 0.25f);  // (1/16) / 0.25
-    EXPECT_FLOAT_EQ(GenerateConeMap(hf, ConeKind::RelaxedExact).At(1, 5), 0.625f);  // (5/16) / 0.5
+    EXPECT_FLOAT_EQ(GenerateConeMap(hf, ConeKind::Cone).At(1, 5),
+                    0.25f);  // (1/16) / 0.25
+    EXPECT_FLOAT_EQ(GenerateConeMap(hf, ConeKind::RelaxedExact).At(1, 5),
+                    0.625f);  // (5/16) / 0.5
     ConeMapParams p;
     // The march from destination i = 6 stops k steps out, in texel 7 (closed form in the
     // docs): (u_k - 1.5/16) / (0.75 - z_k) with u_k = 6.5/16 + k du, z_k = 0.25 + k dz.
@@ -278,7 +302,8 @@ TEST(ConeMap, RelaxedWorkedExampleOfTheDocs) {
         return (6.5 / 16 + k * du - 1.5 / 16) / (0.75 - (0.25 + k * dz));
     };
     p.searchSteps = 128;
-    EXPECT_NEAR(GenerateConeMap(hf, ConeKind::Relaxed, p).At(1, 5), listing(128, 5), 1e-5);
+    EXPECT_NEAR(GenerateConeMap(hf, ConeKind::Relaxed, p).At(1, 5), listing(128, 5),
+                1e-5);
     EXPECT_NEAR(GenerateConeMap(hf, ConeKind::Relaxed, p).At(1, 5), 0.7417, 5e-5);
     p.searchSteps = 16;
     EXPECT_NEAR(GenerateConeMap(hf, ConeKind::Relaxed, p).At(1, 5), listing(16, 1), 1e-5);
@@ -299,10 +324,12 @@ void ExpectConservative(const HeightField& hf, const ConeMap& m) {
                     if (!(db < dt)) continue;
                     const int dx = std::min(std::abs(x - i), W - std::abs(x - i));
                     const int dy = std::min(std::abs(y - j), H - std::abs(y - j));
-                    const long double dist = std::sqrt((long double)(dx) * dx / ((long double)W * W) +
-                                                       (long double)(dy) * dy / ((long double)H * H));
+                    const long double dist =
+                        std::sqrt((long double)(dx)*dx / ((long double)W * W) +
+                                  (long double)(dy)*dy / ((long double)H * H));
                     ASSERT_LE(r * ((long double)dt - db), dist)
-                        << "texel " << i << "," << j << " blocker " << x << "," << y << " r " << double(r) << " dt " << dt << " db " << db;
+                        << "texel " << i << "," << j << " blocker " << x << "," << y
+                        << " r " << double(r) << " dt " << dt << " db " << db;
                 }
         }
 }
@@ -320,11 +347,13 @@ TEST(ConeMap, ConservativeAfterEncoding) {
 TEST(ConeMap, EncodingNeverWidens) {
     for (uint64_t s = 0; s < 20000; ++s) {
         const float r = float(Mix64(s) >> 40) * (1.3f / 16777216.0f);
-        for (ConeEncoding e : {ConeEncoding::U8, ConeEncoding::U8Sqrt, ConeEncoding::U16}) {
+        for (ConeEncoding e :
+             {ConeEncoding::U8, ConeEncoding::U8Sqrt, ConeEncoding::U16}) {
             const uint16_t c = EncodeRatio(r, e);
             ASSERT_LE(DecodeRatio(c, e), r) << r << " " << ToString(e);
             if (r <= 1.0f && c < (e == ConeEncoding::U16 ? 65535 : 255)) {
-                ASSERT_GT(DecodeRatio(uint16_t(c + 1), e), r) << "not the nearest code below";
+                ASSERT_GT(DecodeRatio(uint16_t(c + 1), e), r)
+                    << "not the nearest code below";
             }
         }
     }
@@ -351,15 +380,18 @@ TEST(ConeMap, BilinearSafetyPassStaysConservative) {
             lo = std::min(lo, exact.At(i, j));
             hiSafe = std::max(hiSafe, safe.At(i, j));
         }
-        // Any weighted mean of the four safe values is <= their max <= the smallest exact one.
+        // Any weighted mean of the four safe values is <= their max <= the smallest exact
+        // one.
         ASSERT_LE(hiSafe, lo) << u << "," << v;
     }
 }
 
 TEST(ConeMap, AdaptiveNeverWider) {
-    for (const HeightField& hf : {MakeBuiltinMap("shapes", 64, 64), MakeBuiltinMap("bumps", 64, 64),
-                                  RandomField(64, 64, 4, true), RandomField(48, 40, 4, false)})
-        for (ConeKind k : {ConeKind::Cone, ConeKind::Quad, ConeKind::Acm4, ConeKind::Acm8}) {
+    for (const HeightField& hf :
+         {MakeBuiltinMap("shapes", 64, 64), MakeBuiltinMap("bumps", 64, 64),
+          RandomField(64, 64, 4, true), RandomField(48, 40, 4, false)})
+        for (ConeKind k :
+             {ConeKind::Cone, ConeKind::Quad, ConeKind::Acm4, ConeKind::Acm8}) {
             const ConeMap exact = GenerateConeMap(hf, k);
             for (float th : {0.0f, 0.05f, 1.0f})
                 for (int levels : {1, 3}) {
@@ -367,7 +399,8 @@ TEST(ConeMap, AdaptiveNeverWider) {
                     const ConeMap a = GenerateAdaptiveSectorMap(hf, k, th, levels, &st);
                     for (size_t t = 0; t < a.values.size(); ++t) {
                         ASSERT_LE(a.values[t], exact.values[t])
-                            << hf.name << " " << ToString(k) << " th " << th << " at " << t;
+                            << hf.name << " " << ToString(k) << " th " << th << " at "
+                            << t;
                     }
                     if (th == 0.0f) {
                         EXPECT_GT(st.nSearched, 0);
@@ -385,13 +418,16 @@ TEST(ConeMap, AdaptiveWithZeroLevelsIsExact) {
 TEST(ConeMap, SectorsAreAtLeastTheConservativeRatio) {
     const HeightField hf = MakeBuiltinMap("shapes", 32, 32);
     const ConeMap c = GenerateConeMap(hf, ConeKind::Cone);
-    for (ConeKind k : {ConeKind::Quad, ConeKind::Acm4, ConeKind::Acm8, ConeKind::RelaxedExact}) {
+    for (ConeKind k :
+         {ConeKind::Quad, ConeKind::Acm4, ConeKind::Acm8, ConeKind::RelaxedExact}) {
         const ConeMap s = GenerateConeMap(hf, k);
         for (int t = 0; t < 32 * 32; ++t) {
             float mn = kConeRatioCap;
-            for (int ch = 0; ch < s.channels; ++ch) mn = std::min(mn, s.values[size_t(t * s.channels + ch)]);
+            for (int ch = 0; ch < s.channels; ++ch)
+                mn = std::min(mn, s.values[size_t(t * s.channels + ch)]);
             if (k != ConeKind::RelaxedExact) {
-                ASSERT_EQ(mn, c.values[size_t(t)]) << ToString(k);  // min over sectors = cone
+                ASSERT_EQ(mn, c.values[size_t(t)])
+                    << ToString(k);  // min over sectors = cone
             }
             if (k == ConeKind::RelaxedExact) {
                 ASSERT_GE(s.values[size_t(t)], c.values[size_t(t)]);
@@ -437,7 +473,8 @@ TEST(ConeMap, MipPyramidsReduceWrapAwareForOddSizes) {
 }
 
 TEST(ConeMap, CacheDetectsCorruptAndStaleEntries) {
-    const auto dir = std::filesystem::temp_directory_path() / ("rs_cone_cache_" + std::to_string(::getpid()));
+    const auto dir = std::filesystem::temp_directory_path() /
+                     ("rs_cone_cache_" + std::to_string(::getpid()));
     std::filesystem::remove_all(dir);
     MapCache cache(dir.string());
     const HeightField hf = MakeBuiltinMap("shapes", 16, 16);
@@ -468,10 +505,12 @@ TEST(ConeMap, CacheDetectsCorruptAndStaleEntries) {
     // Other pixels or parameters: other key.
     HeightField hf2 = hf;
     hf2.depth[5] = 0.123f;
-    EXPECT_NE(ConeMapCacheKey(hf, ConeKind::Cone, {}), ConeMapCacheKey(hf2, ConeKind::Cone, {}));
+    EXPECT_NE(ConeMapCacheKey(hf, ConeKind::Cone, {}),
+              ConeMapCacheKey(hf2, ConeKind::Cone, {}));
     ConeMapParams p;
     p.searchSteps = 64;
-    EXPECT_NE(ConeMapCacheKey(hf, ConeKind::Relaxed, {}), ConeMapCacheKey(hf, ConeKind::Relaxed, p));
+    EXPECT_NE(ConeMapCacheKey(hf, ConeKind::Relaxed, {}),
+              ConeMapCacheKey(hf, ConeKind::Relaxed, p));
     EXPECT_EQ(made, 3);
     std::filesystem::remove_all(dir);
 }
@@ -492,11 +531,13 @@ TEST(ConeMap, BadInputGivesOneClearError) {
     EXPECT_NE(ConeKindList().find("\"relaxed-exact\""), std::string::npos);
     ConeMapParams p;
     p.searchSteps = 0;
-    EXPECT_THROW(GenerateConeMap(MakeBuiltinMap("flat", 8, 8), ConeKind::Relaxed, p), Error);
+    EXPECT_THROW(GenerateConeMap(MakeBuiltinMap("flat", 8, 8), ConeKind::Relaxed, p),
+                 Error);
 }
 
 TEST(ConeMap, WriteIsAtomicAndRejectsBadExtension) {
-    const auto dir = std::filesystem::temp_directory_path() / ("rs_cone_out_" + std::to_string(::getpid()));
+    const auto dir = std::filesystem::temp_directory_path() /
+                     ("rs_cone_out_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
     const ConeMap m = GenerateConeMap(MakeBuiltinMap("shapes", 16, 16), ConeKind::Acm8);
     EXPECT_THROW(WriteConeMap((dir / "a.jpg").string(), m, ConeEncoding::U8), Error);
@@ -515,7 +556,8 @@ TEST(ConeMap, ExternalGpuGemsMapLoadsAndChecksSize) {
 #ifndef RS_SHARED_DATA
     GTEST_SKIP() << "RS_SHARED_DATA not defined";
 #else
-    const std::string path = std::string(RS_SHARED_DATA) + "/gpugems3-ch18/tile1_cone.tga";
+    const std::string path =
+        std::string(RS_SHARED_DATA) + "/gpugems3-ch18/tile1_cone.tga";
     if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " absent";
     const ConeMap ext = LoadExternalConeMap(path, ConeKind::Cone, 2, 256, 256);
     EXPECT_EQ(ext.width, 256);
@@ -526,26 +568,30 @@ TEST(ConeMap, ExternalGpuGemsMapLoadsAndChecksSize) {
 #endif
 }
 
-/// Statistical comparison with the conservative cone map that the GPU Gems 3 chapter's own GPU
-/// preprocessor made for tile1 (../shared/data/README.md: an independent, approximate
-/// reference; compare, explain, never tune). Ours: exact, stored as u8 like theirs (B channel).
-/// Expected, per that README: texels at depth 0 hold 0 there (the definition gives an unbounded
-/// cone, 1 after clamping); elsewhere their ratios are smaller than the exact ones (about 0.8x on
-/// flat regions, much smaller on slopes) and never wider beyond 8-bit rounding.
+/// Statistical comparison with the conservative cone map that the GPU Gems 3 chapter's
+/// own GPU preprocessor made for tile1 (../shared/data/README.md: an independent,
+/// approximate reference; compare, explain, never tune). Ours: exact, stored as u8 like
+/// theirs (B channel). Expected, per that README: texels at depth 0 hold 0 there (the
+/// definition gives an unbounded cone, 1 after clamping); elsewhere their ratios are
+/// smaller than the exact ones (about 0.8x on flat regions, much smaller on slopes) and
+/// never wider beyond 8-bit rounding.
 TEST(ConeMap, GpuGemsTile1ConeMapStatistics) {
 #ifndef RS_SHARED_DATA
     GTEST_SKIP() << "RS_SHARED_DATA not defined";
 #else
     const std::string dir = std::string(RS_SHARED_DATA) + "/gpugems3-ch18/";
-    if (!std::filesystem::exists(dir + "tile1.tga") || !std::filesystem::exists(dir + "tile1_cone.tga"))
+    if (!std::filesystem::exists(dir + "tile1.tga") ||
+        !std::filesystem::exists(dir + "tile1_cone.tga"))
         GTEST_SKIP() << dir << " absent";
     MapLoadOptions lo;
     lo.channel = Channel::A;
     lo.stores = Stores::Depth;  // A = depth, 0 = top
     const HeightField hf = LoadHeightMapFile(dir + "tile1.tga", lo);
     ASSERT_EQ(hf.width, 256);
-    const ConeMap ours = QuantizeConeMap(GenerateConeMap(hf, ConeKind::Cone), ConeEncoding::U8);
-    const ConeMap gg = LoadExternalConeMap(dir + "tile1_cone.tga", ConeKind::Cone, 2, 256, 256);
+    const ConeMap ours =
+        QuantizeConeMap(GenerateConeMap(hf, ConeKind::Cone), ConeEncoding::U8);
+    const ConeMap gg =
+        LoadExternalConeMap(dir + "tile1_cone.tga", ConeKind::Cone, 2, 256, 256);
     const int W = hf.width, H = hf.height;
     int64_t nTop = 0, nTopZero = 0, nOther = 0, nWider = 0;
     double sumOurs = 0, sumGg = 0;
@@ -566,8 +612,10 @@ TEST(ConeMap, GpuGemsTile1ConeMapStatistics) {
             float range = 0;
             for (int dy = -1; dy <= 1; ++dy)
                 for (int dx = -1; dx <= 1; ++dx)
-                    range = std::max(range, std::abs(hf.At((i + dx + W) % W, (j + dy + H) % H) - d));
-            if (o > 0.0f) (range <= 2.0f / 255.0f ? flat : slope).push_back(double(g) / double(o));
+                    range = std::max(
+                        range, std::abs(hf.At((i + dx + W) % W, (j + dy + H) % H) - d));
+            if (o > 0.0f)
+                (range <= 2.0f / 255.0f ? flat : slope).push_back(double(g) / double(o));
         }
     auto median = [](std::vector<double> v) {
         std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(v.size() / 2), v.end());
@@ -577,25 +625,26 @@ TEST(ConeMap, GpuGemsTile1ConeMapStatistics) {
     ASSERT_FALSE(flat.empty());
     ASSERT_FALSE(slope.empty());
     const double medFlat = median(flat), medSlope = median(slope);
-    std::cout << "tile1: " << nTop << " texels at depth 0 (" << nTopZero << " hold 0 in GPU Gems 3), "
-              << nOther << " others: mean ratio ours " << sumOurs / double(nOther) << ", GPU Gems 3 "
-              << sumGg / double(nOther) << "; median GG3/ours flat " << medFlat << " (" << flat.size()
-              << "), slopes " << medSlope << " (" << slope.size() << "); wider than exact: " << nWider
-              << "\n";
-    EXPECT_EQ(nTopZero, nTop);               // their depth-0 convention
-    EXPECT_LE(nWider, nOther / 1000);        // essentially never wider than the exact cone
-    EXPECT_LT(sumGg, sumOurs);               // narrower on average
-    EXPECT_GT(medFlat, 0.7);                 // README: about 0.8x on flat regions
+    std::cout << "tile1: " << nTop << " texels at depth 0 (" << nTopZero
+              << " hold 0 in GPU Gems 3), " << nOther << " others: mean ratio ours "
+              << sumOurs / double(nOther) << ", GPU Gems 3 " << sumGg / double(nOther)
+              << "; median GG3/ours flat " << medFlat << " (" << flat.size()
+              << "), slopes " << medSlope << " (" << slope.size()
+              << "); wider than exact: " << nWider << "\n";
+    EXPECT_EQ(nTopZero, nTop);         // their depth-0 convention
+    EXPECT_LE(nWider, nOther / 1000);  // essentially never wider than the exact cone
+    EXPECT_LT(sumGg, sumOurs);         // narrower on average
+    EXPECT_GT(medFlat, 0.7);           // README: about 0.8x on flat regions
     EXPECT_LT(medFlat, 0.9);
-    EXPECT_LT(medSlope, medFlat);            // and much narrower on slopes
+    EXPECT_LT(medSlope, medFlat);  // and much narrower on slopes
 #endif
 }
 
 TEST(ConeMap, GpuGemsMapsStoreRatioTimesSourceDepth) {
-    // Finding (docs/cone_maps.md): the chapter's companion maps hold min(ratio, 1) * d, d the
-    // texel's depth, for both its conservative and its relaxed (Listing 18-2, 128 steps)
-    // maps; that explains their zeros at depth 0 and why they are narrower than the
-    // definitions. Compared in 8-bit codes against our exact maps times d.
+    // Finding (docs/cone_maps.md): the chapter's companion maps hold min(ratio, 1) * d, d
+    // the texel's depth, for both its conservative and its relaxed (Listing 18-2, 128
+    // steps) maps; that explains their zeros at depth 0 and why they are narrower than
+    // the definitions. Compared in 8-bit codes against our exact maps times d.
 #ifndef RS_SHARED_DATA
     GTEST_SKIP() << "RS_SHARED_DATA not defined";
 #else
@@ -606,9 +655,10 @@ TEST(ConeMap, GpuGemsMapsStoreRatioTimesSourceDepth) {
         ConeKind kind;
         double within2;  ///< least share of texels within 2 codes of ours * d
     };
-    for (const Case& c : {Case{"tile1", "tile1_cone", ConeKind::Cone, 0.99},
-                          Case{"tile1", "tile1_relaxedcone", ConeKind::Relaxed, 0.75},
-                          Case{"rockbump", "rockbump_relaxedcone", ConeKind::Relaxed, 0.65}}) {
+    for (const Case& c :
+         {Case{"tile1", "tile1_cone", ConeKind::Cone, 0.99},
+          Case{"tile1", "tile1_relaxedcone", ConeKind::Relaxed, 0.75},
+          Case{"rockbump", "rockbump_relaxedcone", ConeKind::Relaxed, 0.65}}) {
         const std::string hpath = dir + c.map + ".tga", cpath = dir + c.cone + ".tga";
         if (!std::filesystem::exists(hpath) || !std::filesystem::exists(cpath))
             GTEST_SKIP() << dir << " absent";
@@ -630,10 +680,12 @@ TEST(ConeMap, GpuGemsMapsStoreRatioTimesSourceDepth) {
                 plainNear2 += std::abs(g - std::lround(double(r) * 255.0)) <= 2;
                 diff.push_back(int(g - scaled));
             }
-        std::nth_element(diff.begin(), diff.begin() + std::ptrdiff_t(diff.size() / 2), diff.end());
-        std::cout << c.cone << ": within 2 codes of ratio * depth " << double(near2) / double(n)
-                  << " (of the plain ratio " << double(plainNear2) / double(n)
-                  << "), median difference " << diff[diff.size() / 2] << " codes\n";
+        std::nth_element(diff.begin(), diff.begin() + std::ptrdiff_t(diff.size() / 2),
+                         diff.end());
+        std::cout << c.cone << ": within 2 codes of ratio * depth "
+                  << double(near2) / double(n) << " (of the plain ratio "
+                  << double(plainNear2) / double(n) << "), median difference "
+                  << diff[diff.size() / 2] << " codes\n";
         EXPECT_GE(double(near2), c.within2 * double(n)) << c.cone;
         EXPECT_LE(std::abs(diff[diff.size() / 2]), 1) << c.cone;
         EXPECT_LT(plainNear2 * 2, near2) << c.cone;  // the plain ratio fits far worse

@@ -1,17 +1,16 @@
 // Height-map loading: formats, channels, conventions, bad files.
-#include <gtest/gtest.h>
+#include "texture/image_io.h"
 
 #include <OpenImageIO/imageio.h>
+#include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 
-#include <sys/stat.h>
-
 #include "core/error.h"
-#include "texture/image_io.h"
 
 using namespace reliefsim;
 namespace fs = std::filesystem;
@@ -19,10 +18,10 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path TempDir() {
-    fs::path p = fs::path(::testing::TempDir()) /
-                 ("rs_image_io_" + std::string(::testing::UnitTest::GetInstance()
-                                                   ->current_test_info()
-                                                   ->name()));
+    fs::path p =
+        fs::path(::testing::TempDir()) /
+        ("rs_image_io_" +
+         std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(p);
     fs::create_directories(p);
     return p;
@@ -112,7 +111,8 @@ TEST(ImageIo, MissingAndCorruptFilesNameTheFile) {
     EXPECT_THROW(LoadHeightMap(bad, {}), Error);
     // a truncated PNG: valid header, no data
     std::string p = (d / "trunc.png").string();
-    WriteWithOiio<uint8_t>(p, 64, 64, 1, OIIO::TypeDesc::UINT8, std::vector<uint8_t>(4096, 7));
+    WriteWithOiio<uint8_t>(p, 64, 64, 1, OIIO::TypeDesc::UINT8,
+                           std::vector<uint8_t>(4096, 7));
     fs::resize_file(p, 60);
     EXPECT_THROW(LoadHeightMap(p, {}), Error);
 }
@@ -158,12 +158,16 @@ TEST(ImageIo, OnlyRegularFilesAreRead) {
 TEST(ImageIo, ReadImageFileReportsFormatAndPicksChannels) {
     fs::path d = TempDir();
     std::string path = (d / "c.tga").string();
-    WriteWithOiio<uint8_t>(path, 2, 1, 4, OIIO::TypeDesc::UINT8, {10, 20, 30, 255, 40, 50, 60, 255});
+    WriteWithOiio<uint8_t>(path, 2, 1, 4, OIIO::TypeDesc::UINT8,
+                           {10, 20, 30, 255, 40, 50, 60, 255});
     int seen = 0;
-    ImageData img = ReadImageFile(path, "test", [&](int nc) {
-        seen = nc;
-        return std::pair<int, int>{1, 3};
-    }, true);
+    ImageData img = ReadImageFile(
+        path, "test",
+        [&](int nc) {
+            seen = nc;
+            return std::pair<int, int>{1, 3};
+        },
+        true);
     EXPECT_EQ(seen, 4);
     EXPECT_EQ(img.format, "targa");
     ASSERT_TRUE(img.is8);
@@ -171,7 +175,8 @@ TEST(ImageIo, ReadImageFileReportsFormatAndPicksChannels) {
     EXPECT_EQ(img.values8, (std::vector<uint8_t>{20, 30, 50, 60}));
     // The picker's Error propagates unchanged.
     std::string e = ErrorOf([&] {
-        ReadImageFile(path, "test", [](int) -> std::pair<int, int> { throw Error("mine"); }, true);
+        ReadImageFile(
+            path, "test", [](int) -> std::pair<int, int> { throw Error("mine"); }, true);
     });
     EXPECT_EQ(e, "mine");
 }

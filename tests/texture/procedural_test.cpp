@@ -1,8 +1,9 @@
 // Built-in maps: names, sizes, range, determinism, bad specs.
+#include "texture/procedural.h"
+
 #include <gtest/gtest.h>
 
 #include "core/error.h"
-#include "texture/procedural.h"
 
 using namespace reliefsim;
 
@@ -31,8 +32,8 @@ TEST(Procedural, ShapesHasTopAndFloorAndSteps) {
         lo = std::min(lo, d);
         hi = std::max(hi, d);
     }
-    EXPECT_LT(lo, 0.02f);           // reaches the top
-    EXPECT_NEAR(hi, 0.8f, 1e-6f);   // the floor
+    EXPECT_LT(lo, 0.02f);          // reaches the top
+    EXPECT_NEAR(hi, 0.8f, 1e-6f);  // the floor
 }
 
 TEST(Procedural, AnalyticFieldsHaveClosedForms) {

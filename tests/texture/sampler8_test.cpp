@@ -1,4 +1,5 @@
-// The 8-bit sampler precisions: llvmpipe's AoS 8.8 fixed-point model and the GPU-spec mode.
+// The 8-bit sampler precisions: llvmpipe's AoS 8.8 fixed-point model and the GPU-spec
+// mode.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -40,10 +41,12 @@ TEST(SamplerPrecision, Lerp8IsFloorOfRoundedProduct) {
 TEST(SamplerPrecision, Llvmpipe8ReturnsTexelsAtCentresAndHalfAtMidpoints) {
     HeightField f = HeightFieldFromUnorm8(4, 1, {0, 255, 10, 20}, "row");
     FetchCounts counts;
-    CountingSampler s(f, {Filter::Bilinear, WrapMode::Clamp, Precision::Llvmpipe8}, &counts);
+    CountingSampler s(f, {Filter::Bilinear, WrapMode::Clamp, Precision::Llvmpipe8},
+                      &counts);
     for (int i = 0; i < 4; ++i)
         EXPECT_EQ(s.Sample({(float(i) + 0.5f) / 4.0f, 0.5f}), f.depth[size_t(i)]) << i;
-    // Between texel 0 (0) and texel 1 (255): weight 128/256 -> 0 + floor((128*255+128)/256).
+    // Between texel 0 (0) and texel 1 (255): weight 128/256 -> 0 +
+    // floor((128*255+128)/256).
     EXPECT_EQ(s.Sample({0.25f, 0.5f}), Unorm8ToFloat(128));
     EXPECT_EQ(counts.nFetches, 5u);
     EXPECT_EQ(counts.nTexelReads, 20u);
@@ -63,12 +66,14 @@ TEST(SamplerPrecision, Llvmpipe8ResultsAreEightBitAndNearTheFloatModel) {
             const float v = float(x >> 8) / float(1 << 24) * 1.6f - 0.3f;
             const float a = fixed.Sample({u, v}), b = exact.Sample({u, v});
             const float q = std::nearbyint(a * 255.0f);
-            ASSERT_EQ(a, Unorm8ToFloat(uint8_t(q))) << "not an 8-bit value at " << u << "," << v;
+            ASSERT_EQ(a, Unorm8ToFloat(uint8_t(q)))
+                << "not an 8-bit value at " << u << "," << v;
             // §2.2 measured 1.2-1.7/255 against exact bilinear.
             ASSERT_LE(std::fabs(a - b), 2.0f / 255.0f) << u << "," << v;
             differing += a != b;
         }
-        EXPECT_GT(differing, 1000) << "the fixed-point model must differ from float filtering";
+        EXPECT_GT(differing, 1000)
+            << "the fixed-point model must differ from float filtering";
     }
 }
 
@@ -77,7 +82,8 @@ TEST(SamplerPrecision, Llvmpipe8NonPowerOfTwoRepeatWraps) {
     Sampler<false> s(f, {Filter::Bilinear, WrapMode::Repeat, Precision::Llvmpipe8});
     // One period apart, the same footprint and weights.
     for (float u : {0.01f, 0.33f, 0.97f})
-        for (float v : {0.02f, 0.5f, 0.99f}) EXPECT_EQ(s.Sample({u, v}), s.Sample({u + 1.0f, v}));
+        for (float v : {0.02f, 0.5f, 0.99f})
+            EXPECT_EQ(s.Sample({u, v}), s.Sample({u + 1.0f, v}));
 }
 
 TEST(SamplerPrecision, Gpu8RoundsWeightsToSubtexelSteps) {

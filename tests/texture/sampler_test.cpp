@@ -1,10 +1,12 @@
-// Samplers: values on small known textures, wrap modes, llvmpipe float model, exact counts.
+// Samplers: values on small known textures, wrap modes, llvmpipe float model, exact
+// counts.
+#include "texture/sampler.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "texture/procedural.h"
-#include "texture/sampler.h"
 
 using namespace reliefsim;
 
@@ -70,7 +72,7 @@ TEST(Sampler, BilinearAtCentreIsMeanOfFour) {
     HeightField f = Make(2, 2, {0.0f, 1.0f, 0.25f, 0.75f});
     Sampler<false> s(f, {Filter::Bilinear, WrapMode::Clamp});
     EXPECT_FLOAT_EQ(s.Sample({0.5f, 0.5f}), 0.5f);
-    EXPECT_EQ(s.Sample({0.25f, 0.25f}), 0.0f);   // texel centre: weight 0
+    EXPECT_EQ(s.Sample({0.25f, 0.25f}), 0.0f);       // texel centre: weight 0
     EXPECT_FLOAT_EQ(s.Sample({0.5f, 0.25f}), 0.5f);  // halfway along row 0
 }
 
@@ -78,7 +80,8 @@ TEST(Sampler, BilinearRepeatBlendsAcrossTheSeam) {
     HeightField f = Make(2, 1, {0.0f, 1.0f});
     Sampler<false> rep(f, {Filter::Bilinear, WrapMode::Repeat});
     Sampler<false> clamp(f, {Filter::Bilinear, WrapMode::Clamp});
-    EXPECT_FLOAT_EQ(rep.Sample({0.0f, 0.5f}), 0.5f);  // halfway between texel 1 and texel 0
+    EXPECT_FLOAT_EQ(rep.Sample({0.0f, 0.5f}),
+                    0.5f);  // halfway between texel 1 and texel 0
     EXPECT_FLOAT_EQ(clamp.Sample({0.0f, 0.5f}), 0.0f);
     EXPECT_FLOAT_EQ(clamp.Sample({1.0f, 0.5f}), 1.0f);
 }
@@ -86,9 +89,11 @@ TEST(Sampler, BilinearRepeatBlendsAcrossTheSeam) {
 TEST(Sampler, BilinearRepeatNonPowerOfTwo) {
     HeightField f = Make(3, 1, {0.0f, 0.5f, 1.0f});
     Sampler<false> s(f, {Filter::Bilinear, WrapMode::Repeat});
-    EXPECT_FLOAT_EQ(s.Sample({0.0f, 0.5f}), 0.5f);  // between texel 2 (1.0) and texel 0 (0.0)
+    EXPECT_FLOAT_EQ(s.Sample({0.0f, 0.5f}),
+                    0.5f);  // between texel 2 (1.0) and texel 0 (0.0)
     EXPECT_FLOAT_EQ(s.Sample({0.5f, 0.5f}), 0.5f);
-    // 1 + 0.5/3 loses bits in u - floor(u): llvmpipe's NPOT repeat lands 1 ulp off the centre
+    // 1 + 0.5/3 loses bits in u - floor(u): llvmpipe's NPOT repeat lands 1 ulp off the
+    // centre
     EXPECT_NEAR(s.Sample({1.0f + 0.5f / 3.0f, 0.5f}), 0.0f, 2e-7f);
 }
 
@@ -100,7 +105,8 @@ TEST(Sampler, BilinearCloseToExactReference) {
         for (int k = 0; k < 2000; ++k) {
             state = Mix64(state + k);
             float u = float(double(state >> 40) / double(1 << 24) * 1.6 - 0.3);
-            float v = float(double((state >> 16) & 0xFFFFFF) / double(1 << 24) * 1.6 - 0.3);
+            float v =
+                float(double((state >> 16) & 0xFFFFFF) / double(1 << 24) * 1.6 - 0.3);
             EXPECT_NEAR(double(s.Sample({u, v})), ExactBilinear(f, u, v, wrap), 1e-6)
                 << "u=" << u << " v=" << v << " wrap=" << ToString(wrap);
         }
@@ -149,11 +155,11 @@ TEST(Sampler, TexelFetchWrapsOrClamps) {
 }
 
 TEST(Sampler, NearestUsesFloatProductForTexelSelection) {
-    // research/llvmpipe.md §2.3: the nearest texel is trunc(float(u) * n), the product rounded
-    // to float. Search the u just beside each boundary k/n for one where rounding the product
-    // to float crosses the boundary that the exact (double) product stays below; the sampler
-    // must pick the float texel, which differs from the double one, so a sampler computing
-    // the index in double fails here.
+    // research/llvmpipe.md §2.3: the nearest texel is trunc(float(u) * n), the product
+    // rounded to float. Search the u just beside each boundary k/n for one where rounding
+    // the product to float crosses the boundary that the exact (double) product stays
+    // below; the sampler must pick the float texel, which differs from the double one, so
+    // a sampler computing the index in double fails here.
     int nFound = 0;
     for (int n : {3, 5, 7, 11, 13, 25, 100, 255}) {
         std::vector<float> depth(static_cast<size_t>(n));
@@ -169,14 +175,16 @@ TEST(Sampler, NearestUsesFloatProductForTexelSelection) {
                     if (iFloat == iDouble) continue;
                     ++nFound;
                     EXPECT_EQ(s.Sample({u, 0.5f}), float(iFloat))
-                        << "n " << n << ", u " << u << " (double texel " << iDouble << ")";
+                        << "n " << n << ", u " << u << " (double texel " << iDouble
+                        << ")";
                 }
             }
         }
     }
-    EXPECT_GT(nFound, 0) << "no u with floorf(u*n) != floor(double(u)*n): the test is vacuous";
-    // A known case: u = 7/11 rounded to float is 0x1.45d174p-1, just below 7/11; the exact
-    // product 11u = 6.99999988... (texel 6) rounds to 7.0f in float (texel 7).
+    EXPECT_GT(nFound, 0)
+        << "no u with floorf(u*n) != floor(double(u)*n): the test is vacuous";
+    // A known case: u = 7/11 rounded to float is 0x1.45d174p-1, just below 7/11; the
+    // exact product 11u = 6.99999988... (texel 6) rounds to 7.0f in float (texel 7).
     const float u11 = 7.0f / 11.0f;
     ASSERT_EQ(std::floor(u11 * 11.0f), 7.0f);
     ASSERT_EQ(std::floor(double(u11) * 11.0), 6.0);
