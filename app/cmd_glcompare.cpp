@@ -14,6 +14,7 @@
 #include "raster/camera.h"
 #include "raster/rasterizer.h"
 #include "raster/viewport_pieces.h"
+#include "render/batch.h"
 
 namespace reliefsim {
 
@@ -210,7 +211,7 @@ GlScene MakeGlScene(const RenderSettings& s) {
     g.sampler = s.sampler;
     g.format = s.sampler.precision == Precision::Llvmpipe8 ? TextureFormat::R8
                                                            : TextureFormat::R32F;
-    const MethodInfo& method = FindMethod(s.method);
+    const KernelInfo& method = FindMethod(s.method);
     g.kernel = MakeKernel(method, ResolveParams(method, s.set));
     return g;
 }
@@ -245,7 +246,8 @@ GlCompareResult RunGlCompare(const HeightField& field, const RenderSettings& s,
         const FrameRecord& rec = r.cpu.record;
         std::vector<uint32_t> fetches(triangles.size(), 0);
         const ViewUniforms uniforms = MakeViewUniforms(s);
-        const Kernel& kernel = scene.kernel;
+        std::shared_ptr<const void> params;
+        const BatchJob job = MakeBatchJob(scene.kernel, {&field, s.sampler}, params);
         detail::DenormalsAreZeroScope fp;  // as in the frame loop
         for (int y = 0; y < s.height; ++y)
             for (int x = 0; x < s.width; ++x) {
@@ -257,11 +259,7 @@ GlCompareResult RunGlCompare(const HeightField& field, const RenderSettings& s,
                 }
                 // A pixel the pieces cover but the plane does not (a centre within 1/256
                 // pixel of a clipped edge): run the C++ kernel for it.
-                FetchCounts counts;
-                CountingSampler sampler(field, s.sampler, &counts);
-                const MarchInput in = PixelToRay(uniforms, x, y);
-                std::visit([&](const auto& k) { k.March(in, sampler); }, kernel);
-                fetches[i] = counts.nFetches;
+                fetches[i] = MarchRay(job, PixelToRay(uniforms, x, y)).counts.nFetches;
             }
         LaneTrips measured;
         measured.blocksX = r.gl.lanes.blocksX;

@@ -23,7 +23,8 @@ void RegisterMethodsCommand(CLI::App& root) {
     auto names = std::make_shared<bool>(false);
     cmd->add_flag("--names", *names, "print only the method names, one per line");
     cmd->callback([names] {
-        for (const MethodInfo& m : Methods()) {
+        for (const KernelInfo* info : Methods()) {
+            const KernelInfo& m = *info;
             if (*names) {
                 std::cout << m.name << "\n";
                 continue;
@@ -35,7 +36,9 @@ void RegisterMethodsCommand(CLI::App& root) {
                 for (const auto& map : m.maps) std::cout << " " << map;
                 std::cout << "\n";
             }
-            for (const ParamDef& p : m.params)
+            if (!m.glslFile.empty())
+                std::cout << "    GLSL twin: kernels/glsl/" << m.glslFile << "\n";
+            for (const ParamSpec& p : m.params)
                 std::cout << "    --set " << p.name << "=" << Number(p.defaultValue)
                           << "  [" << Number(p.minValue) << ", " << Number(p.maxValue)
                           << "]" << (p.integer ? " integer" : "") << "  " << p.help

@@ -2,6 +2,7 @@
 // outputs.
 #include "app/pipeline.h"
 
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -20,6 +21,7 @@
 #include "raster/camera.h"
 #include "raster/mesh.h"
 #include "raster/rasterizer.h"
+#include "render/batch.h"
 
 namespace reliefsim {
 
@@ -60,6 +62,7 @@ void ValidateSettings(const RenderSettings& s) {
         !(s.fetchScaleMax > s.fetchScaleMin))
         bad("--fetches-scale: MIN and MAX must be finite with MAX > MIN");
     ResolveParams(FindMethod(s.method), s.set);
+    PickLaneWidth(s.lanes);
 }
 
 uint64_t EstimateFrameBytes(int width, int height, uint64_t bytesPerPixel) {
@@ -129,16 +132,23 @@ glm::vec3 Shade(const HeightField& field, const SamplerState& state, glm::vec2 u
 
 struct TileTotals {
     uint64_t helperLanes = 0, helperFetches = 0, helperTexelReads = 0;
+    LaneCosts laneCost;
 };
 
-template <class KernelT>
-class KernelProgram {
+// The fragment stage: quads are collected per triangle and tile, their rays computed, and
+// run through the fragment driver (render/batch.h) in packs of the lane width; results go
+// to the record, helper lanes to the tile's totals, and each (group, triangle) costs its
+// group's largest trip count times its lanes.
+class FrameProgram {
   public:
-    KernelProgram(const KernelT& kernel, const HeightField& field,
-                  const SamplerState& state, const ViewUniforms& uniforms,
-                  float slopeScale, FrameRecord& record, std::vector<float>& color,
-                  std::vector<TileTotals>& tiles)
-        : kernel_(kernel),
+    static constexpr bool kReadsAttributes = false;  // rays come from PixelToRay
+
+    FrameProgram(const BatchJob& job, BatchFn run, const HeightField& field,
+                 const SamplerState& state, const ViewUniforms& uniforms,
+                 float slopeScale, FrameRecord& record, std::vector<float>& color,
+                 std::vector<TileTotals>& tiles)
+        : job_(job),
+          run_(run),
           field_(field),
           state_(state),
           uniforms_(uniforms),
@@ -148,40 +158,120 @@ class KernelProgram {
           tiles_(tiles) {}
 
     void ShadeQuad(const QuadFragment& q, int tileIndex) {
-        for (int k = 0; k < 4; ++k) {
-            const int px = q.pixel0.x + (k & 1), py = q.pixel0.y + (k >> 1);
-            MarchInput in = PixelToRay(uniforms_, px, py);
-            FetchCounts counts;
-            CountingSampler sampler(field_, state_, &counts);
-            MarchResult m = kernel_.March(in, sampler);
-            if (!((q.coveredMask >> k) & 1u)) {
-                TileTotals& t = tiles_[size_t(tileIndex)];
-                ++t.helperLanes;
-                t.helperFetches += counts.nFetches;
-                t.helperTexelReads += counts.nTexelReads;
-                continue;
-            }
-            const size_t i = record_.Index(px, py);
-            record_.hitU[i] = m.uvHit.x;
-            record_.hitV[i] = m.uvHit.y;
-            record_.hitDepth[i] = m.depthHit;
-            record_.nCoarse[i] = m.nCoarse;
-            record_.nRefine[i] = m.nRefine;
-            record_.nFetches[i] = counts.nFetches;
-            record_.nTexelReads[i] = counts.nTexelReads;
-            uint8_t f = kFlagCovered;
-            if (m.budgetExhausted) f |= kFlagBudgetExhausted;
-            if (!m.hit) f |= kFlagNoHit;
-            record_.flags[i] = f;
-            glm::vec3 c = Shade(field_, state_, m.uvHit, m.depthHit, slopeScale_, m.hit);
-            color_[3 * i + 0] = c.x;
-            color_[3 * i + 1] = c.y;
-            color_[3 * i + 2] = c.z;
-        }
+        Scratch& s = scratch_.local();
+        s.quads.push_back({q.pixel0, q.coveredMask});
+        if (s.quads.size() == kMaxPending) Flush(s, tileIndex);
+    }
+
+    void EndTriangleInTile(int tileIndex) {
+        Scratch& s = scratch_.local();
+        Flush(s, tileIndex);
+        LaneCosts& c = tiles_[size_t(tileIndex)].laneCost;
+        for (uint32_t& m : s.group4x2) c.group4x2 += 8 * std::exchange(m, 0u);
+        for (uint32_t& m : s.warp32) c.warp32 += 32 * std::exchange(m, 0u);
+        for (uint32_t& m : s.wave64) c.wave64 += 64 * std::exchange(m, 0u);
     }
 
   private:
-    const KernelT& kernel_;
+    static constexpr size_t kMaxPending = 256;  // quads per batch
+    struct PendingQuad {
+        glm::ivec2 pixel0;
+        uint8_t coveredMask;
+    };
+    // Per thread: the pending quads of the tile it runs, the batch arrays, and the
+    // largest trip count of each group of the current (tile, triangle), indexed within
+    // the tile.
+    struct Scratch {
+        std::vector<PendingQuad> quads;
+        std::vector<float> in[4], u, v, depth;
+        std::vector<uint16_t> nCoarse, nRefine;
+        std::vector<uint32_t> fetches, texels;
+        std::vector<uint8_t> flags;
+        std::vector<uint32_t> group4x2 = std::vector<uint32_t>((kTileSize / 4) *
+                                                               (kTileSize / 2)),
+                              warp32 = std::vector<uint32_t>((kTileSize / 8) *
+                                                             (kTileSize / 4)),
+                              wave64 = std::vector<uint32_t>((kTileSize / 8) *
+                                                             (kTileSize / 8));
+    };
+
+    void Flush(Scratch& s, int tileIndex) {
+        const size_t nQuads = s.quads.size();
+        if (nQuads == 0) return;
+        const size_t n = 4 * nQuads;
+        for (auto& a : s.in) a.resize(n);
+        s.u.resize(n), s.v.resize(n), s.depth.resize(n), s.nCoarse.resize(n);
+        s.nRefine.resize(n), s.fetches.resize(n), s.texels.resize(n), s.flags.resize(n);
+        for (size_t q = 0; q < nQuads; ++q) {
+            for (int k = 0; k < 4; ++k) {
+                const MarchInput in = PixelToRay(uniforms_, s.quads[q].pixel0.x + (k & 1),
+                                                 s.quads[q].pixel0.y + (k >> 1));
+                const size_t i = 4 * q + size_t(k);
+                s.in[0][i] = in.uvEntry.x;
+                s.in[1][i] = in.uvEntry.y;
+                s.in[2][i] = in.dirUv.x;
+                s.in[3][i] = in.dirUv.y;
+            }
+        }
+        LaneBatch b;
+        b.n = int(n);
+        b.uEntry = s.in[0].data(), b.vEntry = s.in[1].data();
+        b.du = s.in[2].data(), b.dv = s.in[3].data();
+        b.u = s.u.data(), b.v = s.v.data(), b.depth = s.depth.data();
+        b.nCoarse = s.nCoarse.data(), b.nRefine = s.nRefine.data();
+        b.fetches = s.fetches.data(), b.texelReads = s.texels.data();
+        b.flags = s.flags.data();
+        run_(job_, b);
+
+        TileTotals& tile = tiles_[size_t(tileIndex)];
+        const int tilesX = TileCountX(record_.width);
+        const int tileX0 = (tileIndex % tilesX) * kTileSize;
+        const int tileY0 = (tileIndex / tilesX) * kTileSize;
+        for (size_t q = 0; q < nQuads; ++q) {
+            const PendingQuad& quad = s.quads[q];
+            uint32_t quadTrips = 0;
+            for (int k = 0; k < 4; ++k) {
+                const size_t i = 4 * q + size_t(k);
+                const int px = quad.pixel0.x + (k & 1), py = quad.pixel0.y + (k >> 1);
+                if (!((quad.coveredMask >> k) & 1u)) {
+                    ++tile.helperLanes;
+                    tile.helperFetches += s.fetches[i];
+                    tile.helperTexelReads += s.texels[i];
+                    continue;
+                }
+                quadTrips = std::max(quadTrips, s.fetches[i]);  // one fetch per trip
+                const size_t r = record_.Index(px, py);
+                record_.hitU[r] = s.u[i];
+                record_.hitV[r] = s.v[i];
+                record_.hitDepth[r] = s.depth[i];
+                record_.nCoarse[r] = s.nCoarse[i];
+                record_.nRefine[r] = s.nRefine[i];
+                record_.nFetches[r] = s.fetches[i];
+                record_.nTexelReads[r] = s.texels[i];
+                record_.flags[r] = uint8_t(kFlagCovered | s.flags[i]);
+                const bool hit = !(s.flags[i] & kFlagNoHit);
+                glm::vec3 c = Shade(field_, state_, glm::vec2(s.u[i], s.v[i]), s.depth[i],
+                                    slopeScale_, hit);
+                color_[3 * r + 0] = c.x;
+                color_[3 * r + 1] = c.y;
+                color_[3 * r + 2] = c.z;
+            }
+            // A lane leaves the loop for good, so a group runs as many trips as its
+            // longest-running covered lane.
+            tile.laneCost.quad += 4 * uint64_t(quadTrips);
+            const int lx = quad.pixel0.x - tileX0, ly = quad.pixel0.y - tileY0;
+            uint32_t& g = s.group4x2[size_t((ly / 2) * (kTileSize / 4) + lx / 4)];
+            uint32_t& w = s.warp32[size_t((ly / 4) * (kTileSize / 8) + lx / 8)];
+            uint32_t& v = s.wave64[size_t((ly / 8) * (kTileSize / 8) + lx / 8)];
+            g = std::max(g, quadTrips);
+            w = std::max(w, quadTrips);
+            v = std::max(v, quadTrips);
+        }
+        s.quads.clear();
+    }
+
+    const BatchJob& job_;
+    BatchFn run_;
     const HeightField& field_;
     SamplerState state_;
     ViewUniforms uniforms_;
@@ -189,6 +279,7 @@ class KernelProgram {
     FrameRecord& record_;
     std::vector<float>& color_;
     std::vector<TileTotals>& tiles_;
+    tbb::enumerable_thread_specific<Scratch> scratch_;
 };
 
 }  // namespace
@@ -216,14 +307,24 @@ RenderOutput Render(const HeightField& field, const RenderSettings& s) {
     ValidateSettings(s);
     ValidateHeightField(field);
     RenderOutput out;
-    const MethodInfo& method = FindMethod(s.method);
+    const KernelInfo& method = FindMethod(s.method);
     out.params = ResolveParams(method, s.set);
-    Kernel kernel = MakeKernel(method, out.params);
+    const Kernel kernel = MakeKernel(method, out.params);
+    const LaneWidthInfo& lanes = PickLaneWidth(s.lanes);
+    const std::shared_ptr<const void> params =
+        MakeKernelParams(kernel.index, kernel.values);
+    BatchJob job;
+    job.kernelIndex = kernel.index;
+    job.params = params.get();
+    job.budget = kernel.Budget();
+    job.textures = {&field, s.sampler};
 
     std::unique_ptr<tbb::global_control> limit;
     if (s.threads > 0)
         limit = std::make_unique<tbb::global_control>(
             tbb::global_control::max_allowed_parallelism, size_t(s.threads));
+    out.lanes = lanes.width;
+    out.isa = lanes.isa;
     out.threads = int(
         tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
 
@@ -236,14 +337,9 @@ RenderOutput Render(const HeightField& field, const RenderSettings& s) {
     const float slopeScale = s.depthScale * s.tiling;
 
     auto start = std::chrono::steady_clock::now();
-    RasterStats stats = std::visit(
-        [&](const auto& k) {
-            using K = std::decay_t<decltype(k)>;
-            KernelProgram<K> program(k, field, s.sampler, uniforms, slopeScale,
-                                     out.record, out.color, tiles);
-            return RasterizeFrame(mesh, camera, s.width, s.height, program);
-        },
-        kernel);
+    FrameProgram program(job, lanes.fn, field, s.sampler, uniforms, slopeScale,
+                         out.record, out.color, tiles);
+    const RasterStats stats = RasterizeFrame(mesh, camera, s.width, s.height, program);
     out.frameSeconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     out.nQuads = stats.nQuads;
@@ -251,6 +347,10 @@ RenderOutput Render(const HeightField& field, const RenderSettings& s) {
         out.record.nHelperLanes += t.helperLanes;
         out.record.nHelperFetches += t.helperFetches;
         out.record.nHelperTexelReads += t.helperTexelReads;
+        out.laneCost.quad += t.laneCost.quad;
+        out.laneCost.group4x2 += t.laneCost.group4x2;
+        out.laneCost.warp32 += t.laneCost.warp32;
+        out.laneCost.wave64 += t.laneCost.wave64;
     }
     out.summary = Summarize(out.record, field, s.sampler);
     return out;
@@ -304,7 +404,14 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
     j["heatmap_scale"] = {
         {"iterations", {ShortestDouble(s.iterScaleMin), ShortestDouble(s.iterScaleMax)}},
         {"fetches", {ShortestDouble(s.fetchScaleMin), ShortestDouble(s.fetchScaleMax)}}};
-    j["timing"] = {{"frame_seconds", out.frameSeconds}, {"threads", out.threads}};
+    j["lane_cost_quad"] = out.laneCost.quad;
+    j["lane_cost_4x2"] = out.laneCost.group4x2;
+    j["lane_cost_warp32"] = out.laneCost.warp32;
+    j["lane_cost_wave64"] = out.laneCost.wave64;
+    j["timing"] = {{"frame_seconds", out.frameSeconds},
+                   {"threads", out.threads},
+                   {"lanes", out.lanes},
+                   {"isa", out.isa}};
     return j;
 }
 

@@ -37,6 +37,7 @@ struct RenderSettings {
     float tiling = 1.0f;      ///< texture repeats across the plane; > 0
     SamplerState sampler;     ///< height-map filter and wrap
     int threads = 0;          ///< worker threads; 0 = all cores
+    int lanes = 0;            ///< fragment-driver lane width; 0 = the widest the CPU runs
     float iterScaleMin = 0.0f, iterScaleMax = 64.0f;    ///< iterations heatmap scale
     float fetchScaleMin = 0.0f, fetchScaleMax = 64.0f;  ///< fetches heatmap scale
 };
@@ -63,6 +64,13 @@ uint64_t EstimateFrameBytes(int width, int height,
 void RequireFrameMemory(int width, int height,
                         uint64_t bytesPerPixel = kRenderBytesPerPixel);
 
+/// Lane cost executed by the driver: for every (group, triangle) with a covered pixel,
+/// the group's largest trip count times its lanes, summed. Groups: 2x2 quads, llvmpipe's
+/// 4x2, 32-lane warps of 8x4 pixels, 64-lane waves of 8x8, aligned to the image.
+struct LaneCosts {
+    uint64_t quad = 0, group4x2 = 0, warp32 = 0, wave64 = 0;
+};
+
 struct RenderOutput {
     FrameRecord record;
     std::vector<float> color;  ///< RGB in [0,1], 3 floats per pixel, row 0 at the top
@@ -71,6 +79,9 @@ struct RenderOutput {
     uint64_t nQuads = 0;
     double frameSeconds = 0.0;  ///< wall time of the frame loop (timing only)
     int threads = 0;            ///< threads the frame loop was allowed (timing only)
+    int lanes = 0;              ///< lane width of the fragment driver (timing only)
+    std::string isa;            ///< its instruction set (timing only)
+    LaneCosts laneCost;
 };
 
 /// The view uniforms of the settings' camera (shared by the C++ and GLSL paths).

@@ -76,6 +76,12 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
     cmd->add_option("--threads", o.settings.threads, "worker threads (0 = all cores)")
         ->capture_default_str()
         ->check(CLI::Range(0, kMaxThreads));
+    cmd->add_option(
+           "--lanes", o.settings.lanes,
+           "fragment-driver lane width: 0 = the widest this CPU runs, or 1, 4, 8 "
+           "(AVX2), 16 (AVX-512); results are identical for every width")
+        ->capture_default_str()
+        ->check(CLI::IsMember({0, 1, 4, 8, 16}));
     if (!withHeatmapScales) return;
     cmd->add_option("--iterations-scale", o.iterScale,
                     "fixed MIN:MAX of the iterations heatmap (default 0:64)");

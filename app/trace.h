@@ -10,8 +10,8 @@ namespace reliefsim {
 
 struct TraceFetch {
     glm::vec2 uv;  ///< where the sampler was called
-    float t;      ///< the ray depth at that uv (recovered from the ray), NaN if ambiguous
-    float depth;  ///< what the sampler returned
+    float t;       ///< the ray depth of the fetch, as the kernel computed it
+    float depth;   ///< what the sampler returned
 };
 
 struct PixelTrace {

@@ -1,7 +1,13 @@
-// Microbenchmarks of the kernels with counting and uncounted samplers.
+// Microbenchmarks of the fragment driver and its sampler, at every lane width this CPU
+// runs (docs/benchmarks.md).
+//   BM_Kernel/<method>/<lanes>    rays through one kernel (fetches counted), items =
+//   rays,
+//                                 counter fetches/s
+//   BM_SampleChain/<lanes>        dependent counted bilinear fetches, items = fetches
+//   BM_SampleScalar<counted>      the scalar Sampler, counted and uncounted
 #include <benchmark/benchmark.h>
 
-#include "kernels/linear_search.h"
+#include "render/batch.h"
 #include "texture/procedural.h"
 #include "texture/sampler.h"
 
@@ -10,42 +16,105 @@ using namespace reliefsim;
 namespace {
 
 const HeightField& Field() {
-    static HeightField f = MakeBuiltinMap("shapes", 512, 512);
+    static HeightField f = MakeBuiltinMap("noise", 512, 512);
     return f;
 }
 
-template <bool kCount>
-void BM_MarchRelief(benchmark::State& state) {
-    LinearSearchKernel k;
-    k.params.linearSteps = int(state.range(0));
-    k.params.refineSteps = 6;
-    FetchCounts counts;
-    uint64_t fetches = 0, rays = 0;
-    for (auto _ : state) {
-        for (int i = 0; i < 256; ++i) {
-            Sampler<kCount> s(Field(), {}, &counts);
-            MarchInput in{{float(i) / 256.0f, 0.37f}, {0.3f, 0.1f}};
-            benchmark::DoNotOptimize(k.March(in, s));
-            ++rays;
-        }
-    }
-    fetches = counts.nFetches;
-    state.SetItemsProcessed(int64_t(rays));
-    if (kCount) state.counters["fetches/ray"] = double(fetches) / double(rays);
-}
-BENCHMARK_TEMPLATE(BM_MarchRelief, true)->Arg(16)->Arg(32)->Arg(64);
-BENCHMARK_TEMPLATE(BM_MarchRelief, false)->Arg(16)->Arg(32)->Arg(64);
+constexpr int kRays = 4096;
 
-void BM_SampleBilinear(benchmark::State& state) {
-    Sampler<false> s(Field(), {});
+struct Rays {
+    std::vector<float> uE, vE, du, dv, u, v, depth;
+    std::vector<uint16_t> nc, nr;
+    std::vector<uint32_t> fetches, texels;
+    std::vector<uint8_t> flags;
+    Rays() {
+        for (int i = 0; i < kRays; ++i) {
+            uE.push_back(float(i % 64) / 64.0f);
+            vE.push_back(float(i / 64) / 64.0f);
+            du.push_back(0.3f + 0.1f * float(i % 7) / 7.0f);
+            dv.push_back(-0.12f);
+        }
+        u.resize(kRays), v.resize(kRays), depth.resize(kRays), nc.resize(kRays);
+        nr.resize(kRays), fetches.resize(kRays), texels.resize(kRays),
+            flags.resize(kRays);
+    }
+    LaneBatch Batch() {
+        LaneBatch b;
+        b.n = kRays;
+        b.uEntry = uE.data(), b.vEntry = vE.data(), b.du = du.data(), b.dv = dv.data();
+        b.u = u.data(), b.v = v.data(), b.depth = depth.data(), b.nCoarse = nc.data();
+        b.nRefine = nr.data(), b.fetches = fetches.data(), b.texelReads = texels.data();
+        b.flags = flags.data();
+        return b;
+    }
+};
+
+void BM_Kernel(benchmark::State& state, const KernelInfo* info, LaneWidthInfo width) {
+    if (!width.supported) {
+        state.SkipWithError("this CPU lacks the ISA");
+        return;
+    }
+    std::shared_ptr<const void> params;
+    const BatchJob job =
+        MakeBatchJob(MakeKernel(*info, ResolveParams(*info, {})), {&Field(), {}}, params);
+    Rays rays;
+    LaneBatch b = rays.Batch();
+    uint64_t fetches = 0;
+    for (auto _ : state) {
+        width.fn(job, b);
+        benchmark::ClobberMemory();
+        for (uint32_t f : rays.fetches) fetches += f;
+    }
+    state.SetItemsProcessed(int64_t(state.iterations()) * kRays);
+    state.counters["fetches/s"] =
+        benchmark::Counter(double(fetches), benchmark::Counter::kIsRate);
+}
+
+void BM_SampleChain(benchmark::State& state, LaneWidthInfo width) {
+    if (!width.supported) {
+        state.SkipWithError("this CPU lacks the ISA");
+        return;
+    }
+    constexpr int kLanes = 64, kChain = 256;
+    std::vector<float> u(kLanes), v(kLanes);
+    for (int i = 0; i < kLanes; ++i)
+        u[size_t(i)] = float(i) / kLanes, v[size_t(i)] = 0.3f;
+    const Textures tex{&Field(), {}};
+    uint64_t texels = 0;
+    for (auto _ : state)
+        benchmark::DoNotOptimize(
+            width.sampleChain(tex, u.data(), v.data(), kLanes, kChain, &texels));
+    state.SetItemsProcessed(int64_t(state.iterations()) * kLanes * kChain);
+    state.counters["texel_reads/fetch"] =
+        double(texels) / (double(state.iterations()) * kLanes * kChain);
+}
+
+template <bool kCount>
+void BM_SampleScalar(benchmark::State& state) {
+    FetchCounts counts;
+    Sampler<kCount> s(Field(), {}, &counts);
     float u = 0.1f;
     for (auto _ : state) {
-        u += 0.0013f;
-        benchmark::DoNotOptimize(s.Sample({u, 0.3f}));
+        u += 0.0013f + s.Sample({u, 0.3f}) * 1e-6f;  // dependent, as in a kernel
+        benchmark::DoNotOptimize(u);
     }
     state.SetItemsProcessed(state.iterations());
 }
-BENCHMARK(BM_SampleBilinear);
+BENCHMARK_TEMPLATE(BM_SampleScalar, true);
+BENCHMARK_TEMPLATE(BM_SampleScalar, false);
+
+const int kRegistered = [] {
+    for (const LaneWidthInfo& w : LaneWidths()) {
+        benchmark::RegisterBenchmark(
+            ("BM_SampleChain/" + std::to_string(w.width)).c_str(), BM_SampleChain, w);
+        for (const KernelInfo* m : Methods())
+            benchmark::RegisterBenchmark(
+                ("BM_Kernel/" + std::string(m->name) + "/" + std::to_string(w.width))
+                    .c_str(),
+                BM_Kernel, m, w);
+    }
+    return 0;
+}();
 
 }  // namespace
 

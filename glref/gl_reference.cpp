@@ -89,34 +89,39 @@ GLuint CompileShader(GLenum type, const std::string& source, const char* what) {
     return s;
 }
 
-struct TwinUniforms {
-    int linearSteps = 32, refineSteps = 0, refinement = 0;
-    bool earlyExit = true;
-    uint32_t budget = 0;
-    float secantTolerance = 0.01f;
-};
-
-TwinUniforms KernelUniforms(const Kernel& kernel) {
-    return std::visit(
-        [](const auto& k) {
-            using K = std::decay_t<decltype(k)>;
-            TwinUniforms u;
-            if constexpr (std::is_same_v<K, LinearSearchKernel>) {
-                u.linearSteps = k.params.linearSteps;
-                u.refineSteps = k.params.refineSteps;
-                u.refinement = int(k.params.refinement);  // the GLSL kRefine* order
-                u.earlyExit = k.params.earlyExit;
-                u.budget = k.params.budget;
-                u.secantTolerance = k.params.secantTolerance;
-            }
-            return u;
-        },
-        kernel);
+// Uploads the kernel's parameters to the uniforms its ParamSpecs name, and its fixed
+// constants; each uniform's GLSL type is read from the linked program.
+void UploadKernelUniforms(GLuint program, const Kernel& kernel) {
+    const KernelInfo& info = kernel.Info();
+    auto set = [&](std::string_view uniform, double value) {
+        const std::string name(uniform);
+        const GLint location = glGetUniformLocation(program, name.c_str());
+        if (location < 0) return;  // declared but unused by this assembly
+        const GLuint index = glGetProgramResourceIndex(program, GL_UNIFORM, name.c_str());
+        const GLenum prop = GL_TYPE;
+        GLint type = 0;
+        glGetProgramResourceiv(program, GL_UNIFORM, index, 1, &prop, 1, nullptr, &type);
+        switch (type) {
+            case GL_FLOAT:
+                glUniform1f(location, float(value));
+                break;
+            case GL_UNSIGNED_INT:
+                glUniform1ui(location, GLuint(value));
+                break;
+            case GL_INT:
+            case GL_BOOL:
+                glUniform1i(location, GLint(value));
+                break;
+            default:
+                throw Error("GL reference: uniform " + name + " of " +
+                            std::string(info.glslFile) +
+                            " has a type no parameter maps to");
+        }
+    };
+    for (const ParamSpec& p : info.params)
+        if (!p.uniform.empty()) set(p.uniform, kernel.values.at(std::string(p.name)));
+    for (const GlslConstant& c : info.glslConstants) set(c.uniform, c.value);
 }
-static_assert(int(Refinement::None) == 0 && int(Refinement::Binary) == 1 &&
-                  int(Refinement::Interval) == 2 && int(Refinement::Secant) == 3 &&
-                  int(Refinement::Pom) == 4,
-              "linear_search.glsl kRefine* constants follow enum Refinement");
 
 }  // namespace
 
@@ -228,8 +233,9 @@ void GlReference::Prepare(const HeightField& field, const GlScene& scene) {
         throw Error(
             "--filter min4 with --texture-format r8: not compared (llvmpipe's 8-bit "
             "AoS path with a min reduction is not modelled); use r32f");
-    if (!std::holds_alternative<LinearSearchKernel>(scene.kernel))
-        throw Error("GL reference: this kernel has no GLSL twin yet");
+    if (scene.kernel.Info().glslFile.empty())
+        throw Error("GL reference: kernel " + std::string(scene.kernel.Info().name) +
+                    " has no GLSL twin yet");
     m.ReleaseScene();
     m.width = scene.width;
     m.height = scene.height;
@@ -253,8 +259,8 @@ void GlReference::Prepare(const HeightField& field, const GlScene& scene) {
     if (m.tracing)
         fs +=
             "// ---- trace_probe.glsl\n" + std::string(EmbeddedGlsl("trace_probe.glsl"));
-    fs +=
-        "// ---- linear_search.glsl\n" + std::string(EmbeddedGlsl("linear_search.glsl"));
+    fs += "// ---- " + std::string(scene.kernel.Info().glslFile) + "\n" +
+          std::string(EmbeddedGlsl(scene.kernel.Info().glslFile));
     fs += "// ---- record_main.glsl\n" + std::string(EmbeddedGlsl("record_main.glsl"));
     m.fragmentSource = fs;
     const std::string vs =
@@ -365,13 +371,7 @@ void GlReference::Prepare(const HeightField& field, const GlScene& scene) {
     glUniform1f(loc("uTiling"), u.tiling);
     glUniform1f(loc("uDepthScale"), u.depthScale);
     glUniform1i(loc("uHeights"), 0);
-    const TwinUniforms k = KernelUniforms(scene.kernel);
-    glUniform1i(loc("uLinearSteps"), k.linearSteps);
-    glUniform1i(loc("uRefineSteps"), k.refineSteps);
-    glUniform1i(loc("uRefinement"), k.refinement);
-    glUniform1i(loc("uEarlyExit"), k.earlyExit ? 1 : 0);
-    glUniform1ui(loc("uBudget"), k.budget);
-    glUniform1f(loc("uSecantTolerance"), k.secantTolerance);
+    UploadKernelUniforms(m.program, scene.kernel);
 
     m.lanesTemplate = LaneMeasurement{};
     if (m.measureLanes) {

@@ -1,9 +1,35 @@
-// The kernel interface: what a fragment hands to an intersection kernel and gets back.
+// The kernel interface: how a kernel describes itself, and the per-trip shape every
+// kernel has (docs/architecture.md "Kernels and the fragment driver").
+//
+// A kernel is a type K with
+//   static const KernelInfo& Info();                 name, title, source, parameters,
+//   maps,
+//                                                    GLSL twin: defined once
+//   struct Params; static Params FromValues(const ParamValues&);
+//   template <class L> struct State;                 per-lane state, all in L::F / L::M
+//   template <class L> static void Begin(const Params&, const LaneRay<L>&, State<L>&,
+//                                        Fetch<L>& first);
+//   template <class L> static typename L::M Step(const Params&, const LaneRay<L>&,
+//                                        State<L>&, typename L::F sampled,
+//                                        typename L::M active, Fetch<L>& next);
+//   template <class L> static void End(const Params&, const LaneRay<L>&, const State<L>&,
+//                                      LaneOutcome<L>&);
+// Begin names the first fetch of every lane. The driver (render/fragment_driver.h) then
+// runs trips: one fetch per active lane, then Step, which consumes the sample and returns
+// the lanes that want another fetch (naming it in `next`). Before every fetch the driver
+// applies the fetch budget; a lane refused a fetch stops with its state as it is, so Step
+// keeps in State the answer to return if the lane stopped there. The GLSL twin is the
+// same step in a do-while loop (kernels/glsl/).
 #pragma once
 
-#include <concepts>
 #include <cstdint>
 #include <glm/vec2.hpp>
+#include <map>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "kernels/lanes.h"
 
 namespace reliefsim {
 
@@ -12,50 +38,88 @@ namespace reliefsim {
 /// t = 1 reaches the bottom of the relief.
 struct MarchInput {
     glm::vec2 uvEntry;  ///< uv where the ray enters the relief (tiling included)
-    glm::vec2
-        dirUv;  ///< uv travelled per unit depth: -view.xy / view.z * depthScale * tiling
+    glm::vec2 dirUv;    ///< uv travelled per unit depth: -view.xy / view.z * depthScale *
+                        ///< tiling
 };
 
-/// What a kernel returns for one fragment. Iterations are loop trips; fetches are counted
-/// by the sampler the kernel was given.
+/// What a kernel returns for one fragment. Iterations are loop trips of the paper's
+/// algorithm; fetches are counted by the driver's sampler.
 struct MarchResult {
-    glm::vec2 uvHit{0.0f};  ///< uv of the returned point (unwrapped)
-    float depthHit = 0.0f;  ///< ray depth t of the returned point, in [0,1]
-    uint16_t nCoarse = 0;   ///< coarse-search iterations (linear / cone steps)
-    uint16_t nRefine = 0;   ///< refinement iterations (binary / secant / interval)
-    bool hit = false;       ///< the coarse search found the ray below the surface
-    bool budgetExhausted =
-        false;  ///< stopped by the fetch budget; the point is the estimate then
+    glm::vec2 uvHit{0.0f};         ///< uv of the returned point (unwrapped)
+    float depthHit = 0.0f;         ///< ray depth t of the returned point, in [0,1]
+    uint16_t nCoarse = 0;          ///< coarse-search iterations (linear / cone steps)
+    uint16_t nRefine = 0;          ///< refinement iterations (binary / secant / interval)
+    bool hit = false;              ///< the coarse search found the ray below the surface
+    bool budgetExhausted = false;  ///< stopped by the fetch budget; the point is the
+                                   ///< estimate then
 };
 
-/// What a kernel needs of a height sampler: one Sample(uv) returning depth in [0,1]. Both
-/// instantiations of texture/sampler.h's Sampler (counted and uncounted) satisfy it.
-template <typename S>
-concept HeightSampler = requires(S s, glm::vec2 uv) {
-    { s.Sample(uv) } -> std::convertible_to<float>;
+/// A numeric kernel parameter as given to `--set name=value`, defined once with its
+/// kernel.
+struct ParamSpec {
+    std::string_view name;
+    double defaultValue;
+    double minValue, maxValue;  ///< inclusive valid range
+    bool integer;               ///< integers only (booleans are integers in [0,1])
+    std::string_view help;
+    std::string_view uniform;  ///< the GLSL twin's uniform ("" = none)
 };
 
-/// Counts a kernel's fetches against its budget (0 = none). Kept inside the kernel so
-/// that the uncounted benchmark sampler honours budgets too.
-class FetchBudget {
-  public:
-    explicit FetchBudget(uint32_t budget) : budget_(budget) {}
-    /// True when one more fetch is allowed; then it is charged.
-    bool Take() {
-        if (budget_ != 0 && used_ >= budget_) {
-            exhausted_ = true;
-            return false;
-        }
-        ++used_;
-        return true;
-    }
-    bool Exhausted() const { return exhausted_; }
-    uint32_t Used() const { return used_; }
+/// A uniform the twin needs that is fixed by the kernel, not a parameter.
+struct GlslConstant {
+    std::string_view uniform;
+    int value;
+};
 
-  private:
-    uint32_t budget_;
-    uint32_t used_ = 0;
-    bool exhausted_ = false;
+/// A kernel's self-description: everything the command line, the GL runner and the docs
+/// read about it.
+struct KernelInfo {
+    std::string_view name;    ///< the --method name
+    std::string_view title;   ///< one line
+    std::string_view source;  ///< paper and equation / algorithm numbers
+    std::span<const ParamSpec> params;
+    std::span<const std::string_view> maps;  ///< derived maps it needs besides the height
+    std::string_view glslFile;               ///< its twin in kernels/glsl/
+    std::span<const GlslConstant> glslConstants;
+};
+
+/// Parameter values by name: every parameter of the method, defaults filled in.
+using ParamValues = std::map<std::string, double, std::less<>>;
+
+/// The parameters every kernel has; the driver reads "budget".
+inline constexpr ParamSpec kEarlyExitParam = {
+    "early_exit",
+    1,
+    0,
+    1,
+    true,
+    "1: break out of loops; 0: GPU-style fixed loops (result latched)",
+    "uEarlyExit"};
+inline constexpr ParamSpec kBudgetParam = {
+    "budget", 0, 0, 1000000, true, "fetch budget per fragment; 0 = none", "uBudget"};
+
+/// A pack of rays, one per lane.
+template <class L>
+struct LaneRay {
+    using F = typename L::F;
+    F uEntry, vEntry;  ///< MarchInput::uvEntry
+    F du, dv;          ///< MarchInput::dirUv
+    F U(const F& t) const { return uEntry + du * t; }
+    F V(const F& t) const { return vEntry + dv * t; }
+};
+
+/// Where each lane fetches next: uv, and the ray depth there (for traces).
+template <class L>
+struct Fetch {
+    typename L::F u, v, t;
+};
+
+/// What a kernel reports per lane when the driver is done with it.
+template <class L>
+struct LaneOutcome {
+    typename L::F u, v, depth;  ///< the returned point
+    typename L::F nCoarse, nRefine;
+    typename L::M hit;
 };
 
 }  // namespace reliefsim

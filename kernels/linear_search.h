@@ -1,10 +1,14 @@
 // Linear search (dissertation Alg. 1) followed by a refinement: none, binary (Alg. 2,
 // Policarpo relief mapping), interval (Alg. 3), iterated secant (Risser et al. 2007,
 // listing), or one secant step without a fetch (Tatarchuk's parallax occlusion mapping).
+// Five methods, one source: LinearSearch<R> for each Refinement R.
 //
 // Conventions (DESIGN.md): p(t) = (uvEntry + t * dirUv, t); the ray is inside the relief
-// where t >= depth(uv). Every fetch goes through the sampler and is charged to the
-// FetchBudget.
+// where t >= depth(uv).
+//
+// Shape (kernels/kernel.h): one fetch per trip; Step consumes the sample and decides the
+// next fetch, a state machine coarse -> bottom fetch -> refine, written over lanes with
+// masks. kernels/glsl/linear_search.glsl is the same step, line for line.
 //
 // Where the papers are ambiguous, this file decides (docs/kernels.md explains each):
 //  * Alg. 2 as printed flips the sign of s twice when two consecutive points are below
@@ -17,16 +21,16 @@
 //    (as the POM and secant listings do); only when the linear search found no hit is the
 //    bracket's lower end (t = 1, the bottom) fetched.
 //  * A hit at the very first sample (t = 0) is exact (the surface is at the top there),
-//  so no
-//    refinement runs.
+//  so
+//    no refinement runs.
 //  * early_exit = false runs every loop for its full count, as a GPU with uniform control
-//  flow
-//    would, with the result latched at the point where the break would have happened.
+//    flow would, with the result latched at the point where the break would have
+//    happened.
 #pragma once
 
+#include <array>
 #include <cmath>
 #include <cstdint>
-#include <string_view>
 
 #include "kernels/kernel.h"
 
@@ -34,166 +38,316 @@ namespace reliefsim {
 
 enum class Refinement { None, Binary, Interval, Secant, Pom };
 
-struct LinearSearchKernel {
+namespace detail {
+
+inline constexpr ParamSpec kLinearSteps = {
+    "linear_steps", 32, 1, 1024, true, "linear-search steps over the full depth",
+    "uLinearSteps"};
+inline constexpr ParamSpec RefineSteps(double def, std::string_view help) {
+    return {"refine_steps", def, 0, 64, true, help, "uRefineSteps"};
+}
+inline constexpr ParamSpec kSecantTolerance = {
+    "secant_tolerance",
+    0.01,
+    0,
+    1,
+    false,
+    "stop when |sampled depth - ray depth| <= this",
+    "uSecantTolerance"};
+
+/// The catalogue entries of the five presets (name, title, source, parameters).
+template <Refinement R>
+struct LinearSearchPreset;
+template <>
+struct LinearSearchPreset<Refinement::None> {
+    static constexpr std::string_view kName = "linear",
+                                      kTitle = "linear search (steep parallax mapping)",
+                                      kSource = "Burger 2018 (004) Alg. 1; McGuire 2005";
+    static constexpr std::array<ParamSpec, 3> kParams = {kLinearSteps, kEarlyExitParam,
+                                                         kBudgetParam};
+};
+template <>
+struct LinearSearchPreset<Refinement::Binary> {
+    static constexpr std::string_view
+        kName = "relief",
+        kTitle = "linear search + binary search (relief mapping)",
+        kSource = "Burger 2018 (004) Alg. 1 + Alg. 2; Policarpo & Oliveira (001)";
+    static constexpr std::array<ParamSpec, 4> kParams = {
+        kLinearSteps, RefineSteps(6, "binary-search steps"), kEarlyExitParam,
+        kBudgetParam};
+};
+template <>
+struct LinearSearchPreset<Refinement::Secant> {
+    static constexpr std::string_view
+        kName = "secant",
+        kTitle = "linear search + iterated secant",
+        kSource = "Risser, Shah & Pattanaik 2007 (003) section 3 and listing";
+    static constexpr std::array<ParamSpec, 5> kParams = {
+        kLinearSteps, RefineSteps(10, "secant iterations (at most)"), kSecantTolerance,
+        kEarlyExitParam, kBudgetParam};
+};
+template <>
+struct LinearSearchPreset<Refinement::Interval> {
+    static constexpr std::string_view
+        kName = "interval",
+        kTitle = "linear search + interval search",
+        kSource = "Burger 2018 (004) Alg. 1 + Alg. 3; Risser et al. interval mapping";
+    static constexpr std::array<ParamSpec, 4> kParams = {
+        kLinearSteps, RefineSteps(6, "interval-search steps"), kEarlyExitParam,
+        kBudgetParam};
+};
+template <>
+struct LinearSearchPreset<Refinement::Pom> {
+    static constexpr std::string_view
+        kName = "pom",
+        kTitle = "linear search + one secant step (parallax occlusion mapping)",
+        kSource = "Tatarchuk 2006, as described in Risser et al. 2007 (003) section 2";
+    static constexpr std::array<ParamSpec, 3> kParams = {kLinearSteps, kEarlyExitParam,
+                                                         kBudgetParam};
+};
+
+inline double ValueOr(const ParamValues& v, std::string_view key, double fallback) {
+    auto it = v.find(std::string(key));
+    return it == v.end() ? fallback : it->second;
+}
+
+}  // namespace detail
+
+template <Refinement R>
+struct LinearSearch {
+    using Preset = detail::LinearSearchPreset<R>;
+    static constexpr std::array<GlslConstant, 1> kGlslConstants = {
+        GlslConstant{"uRefinement", int(R)}};
+
+    static const KernelInfo& Info() {
+        static const KernelInfo info{
+            Preset::kName,        Preset::kTitle, Preset::kSource, Preset::kParams, {},
+            "linear_search.glsl", kGlslConstants};
+        return info;
+    }
+
     struct Params {
-        int linearSteps = 32;  ///< coarse steps over t in [0,1]; step = 1/linearSteps
-        int refineSteps = 6;   ///< refinement iterations (ignored by None and Pom)
-        Refinement refinement = Refinement::Binary;
+        int linearSteps = 32;   ///< coarse steps over t in [0,1]; step = 1/linearSteps
+        int refineSteps = 0;    ///< refinement iterations (ignored by None and Pom)
         bool earlyExit = true;  ///< break out of loops (false: GPU-style fixed loops)
-        uint32_t budget = 0;    ///< fetches per fragment, 0 = unlimited
         float secantTolerance = 0.01f;  ///< Risser's |h - z| stop test (listing: 0.01)
     };
-    Params params;
-
-    static glm::vec2 At(const MarchInput& in, float t) {
-        return in.uvEntry + in.dirUv * t;
+    static Params FromValues(const ParamValues& v) {
+        Params p;
+        p.linearSteps = int(detail::ValueOr(v, "linear_steps", 32));
+        p.refineSteps = int(detail::ValueOr(v, "refine_steps", 0));
+        p.earlyExit = detail::ValueOr(v, "early_exit", 1) != 0.0;
+        p.secantTolerance = float(detail::ValueOr(v, "secant_tolerance", 0.01));
+        return p;
     }
 
-    template <HeightSampler S>
-    MarchResult March(const MarchInput& in, S& heights) const {
-        MarchResult r;
-        FetchBudget budget(params.budget);
-        const float stepSize = 1.0f / float(params.linearSteps);
+    enum Phase { kCoarse = 0, kBottom = 1, kRefine = 2, kDone = 3 };
 
-        // Coarse: Alg. 1.
-        float t = 0.0f;
-        float tAbove = 0.0f, hAbove = 0.0f;  // last sample above the surface
-        float tBelow = 0.0f, hBelow = 0.0f;  // first sample below it
-        bool haveAbove = false, found = false;
-        for (int i = 0; i < params.linearSteps; ++i) {
-            if (!budget.Take()) break;
-            ++r.nCoarse;
-            float h = heights.Sample(At(in, t));
-            if (!found) {
-                if (t >= h) {
-                    found = true;
-                    tBelow = t;
-                    hBelow = h;
-                    if (params.earlyExit) break;
-                } else {
-                    tAbove = t;
-                    hAbove = h;
-                    haveAbove = true;
-                }
-            }
-            t = t + stepSize;
-        }
-        r.hit = found;
-        if (budget.Exhausted()) return Finish(r, in, found ? tBelow : t, budget);
-        bool haveBelowSample = found;
-        if (!found) tBelow = t;  // the bottom, reached after linearSteps steps
-
-        float tResult = tBelow;
-        if (haveAbove && params.refinement != Refinement::None) {
-            if (!haveBelowSample && params.refinement != Refinement::Binary) {
-                if (!budget.Take()) return Finish(r, in, tBelow, budget);
-                hBelow = heights.Sample(At(in, tBelow));
-            }
-            switch (params.refinement) {
-                case Refinement::Binary:
-                    tResult = Binary(in, heights, stepSize, tBelow, budget, r);
-                    break;
-                case Refinement::Interval:
-                    tResult =
-                        Interval(in, heights, tAbove, hAbove, tBelow, hBelow, budget, r);
-                    break;
-                case Refinement::Secant:
-                    tResult =
-                        Secant(in, heights, tAbove, hAbove, tBelow, hBelow, budget, r);
-                    break;
-                case Refinement::Pom:
-                    tResult = SecantPoint(tAbove, hAbove, tBelow, hBelow);
-                    r.nRefine = 1;
-                    break;
-                case Refinement::None:
-                    break;
-            }
-        }
-        return Finish(r, in, tResult, budget);
-    }
+    template <class L>
+    struct State {
+        using F = typename L::F;
+        using M = typename L::M;
+        F t, tAbove, hAbove, tBelow, hBelow;  // coarse search
+        M haveAbove, found;
+        F i, k;              // coarse and refinement loop counters
+        F nCoarse, nRefine;  // iterations of the algorithms
+        F s, tb;             // binary search
+        F t1, h1, t2, h2;    // interval / secant bracket
+        F tInt, best;        // interval and secant points
+        M converged;         // secant stop test met
+        F tResult;           // the point returned if the lane stops now
+        F phase;
+    };
 
     /// Where the ray meets the line through the two surface samples (t1, h1) above and
     /// (t2, h2) below: t1 + f (t2 - t1), f = (h1 - t1) / ((t2 - t1) - (h2 - h1)) (Alg. 3;
     /// Risser eq. 6-7 in ray parameters). f is clamped to [0,1] against rounding.
-    static float SecantPoint(float t1, float h1, float t2, float h2) {
-        float denom = (t2 - t1) - (h2 - h1);
-        float f = denom > 0.0f ? (h1 - t1) / denom : 1.0f;
-        f = f < 0.0f ? 0.0f : (f > 1.0f ? 1.0f : f);  // f is finite here; no libm call
+    template <class F>
+    static F SecantPoint(const F& t1, const F& h1, const F& t2, const F& h2) {
+        const F denom = (t2 - t1) - (h2 - h1);
+        F f = Select(denom > F(0.0f), (h1 - t1) / denom, F(1.0f));
+        f = Select(f < F(0.0f), F(0.0f), Select(f > F(1.0f), F(1.0f), f));
         return f * (t2 - t1) + t1;
     }
 
+    template <class L>
+    static void Begin(const Params&, const LaneRay<L>& ray, State<L>& s,
+                      Fetch<L>& first) {
+        using F = typename L::F;
+        using M = typename L::M;
+        const F zero(0.0f);
+        s.t = s.tAbove = s.hAbove = s.tBelow = s.hBelow = zero;
+        s.haveAbove = s.found = s.converged = M(false);
+        s.i = s.k = s.nCoarse = s.nRefine = zero;
+        s.s = s.tb = s.t1 = s.h1 = s.t2 = s.h2 = s.tInt = s.best = s.tResult = zero;
+        s.phase = F(float(kCoarse));
+        first.t = zero;
+        first.u = ray.U(zero);
+        first.v = ray.V(zero);
+    }
+
+    template <class L>
+    static typename L::M Step(const Params& p, const LaneRay<L>& ray, State<L>& s,
+                              const typename L::F& h, const typename L::M& active,
+                              Fetch<L>& next) {
+        using F = typename L::F;
+        using M = typename L::M;
+        const F one(1.0f);
+        const F stepSize = one / F(float(p.linearSteps));
+        M startRefine(false), refineNext(false), want(false);
+        F tq = next.t;
+        // The phase each lane was in when it fetched (a lane changes phase at most once
+        // per trip, below).
+        const M coarse = active && (s.phase == F(float(kCoarse)));
+        const M inBottom = active && (s.phase == F(float(kBottom)));
+        const M inRefine = active && (s.phase == F(float(kRefine)));
+
+        // Coarse: Alg. 1, one trip per sample.
+        if (Any(coarse)) {
+            Assign(coarse, s.nCoarse, s.nCoarse + one);
+            const M open = coarse && !s.found;
+            const M below = open && (s.t >= h);
+            const M above = open && !(s.t >= h);
+            Assign(below, s.tBelow, s.t);
+            Assign(below, s.hBelow, h);
+            s.found = s.found || below;
+            Assign(above, s.tAbove, s.t);
+            Assign(above, s.hAbove, h);
+            s.haveAbove = s.haveAbove || above;
+            const M stopEarly = p.earlyExit ? below : M(false);
+            const M go = coarse && !stopEarly;
+            Assign(go, s.t, s.t + stepSize);
+            Assign(go, s.i, s.i + one);
+            const M last = go && (s.i >= F(float(p.linearSteps)));
+            const M more = go && !last;
+            // Refused by the budget, the lane answers the crossing found or where it is.
+            Assign(more, s.tResult, Select(s.found, s.tBelow, s.t));
+            Assign(more, tq, s.t);
+            want = want || more;
+            const M stop = (coarse && stopEarly) || last;
+            Assign(stop && !s.found, s.tBelow,
+                   s.t);  // the bottom, after linearSteps steps
+            Assign(stop, s.tResult, s.tBelow);
+            Assign(stop, s.phase, F(float(kDone)));
+            if constexpr (R != Refinement::None) {
+                const M refine = stop && s.haveAbove;
+                if constexpr (R == Refinement::Binary) {
+                    startRefine = refine;
+                } else {
+                    const M bottom = refine && !s.found;  // fetch the bracket's lower end
+                    Assign(bottom, tq, s.tBelow);
+                    Assign(bottom, s.phase, F(float(kBottom)));
+                    want = want || bottom;
+                    startRefine = refine && s.found;
+                }
+            }
+        }
+        if constexpr (R != Refinement::None && R != Refinement::Binary) {
+            Assign(inBottom, s.hBelow, h);
+            startRefine = startRefine || inBottom;
+        }
+        if constexpr (R != Refinement::None && R != Refinement::Pom) {
+            // Consume a refinement sample.
+            const M refine = inRefine;
+            if (Any(refine)) {
+                Assign(refine, s.nRefine, s.nRefine + one);
+                if constexpr (R == Refinement::Binary) {
+                    Assign(refine, s.s, s.s * F(0.5f));
+                    Assign(refine, s.tb, Select(s.tb >= h, s.tb - s.s, s.tb + s.s));
+                } else if constexpr (R == Refinement::Interval) {
+                    Narrow(refine, s.tInt, h, s);
+                } else {  // Secant
+                    const M open = refine && !s.converged;
+                    Narrow(open, s.tInt, h, s);
+                    Assign(open, s.best, h);
+                    s.converged =
+                        s.converged ||
+                        (open && (stdx::abs(h - s.tInt) <= F(p.secantTolerance)));
+                }
+                Assign(refine, s.k, s.k + one);
+                refineNext = refine;
+            }
+        }
+        if constexpr (R != Refinement::None) {
+            if (Any(startRefine)) {
+                Assign(startRefine, s.k, F(0.0f));
+                if constexpr (R == Refinement::Binary) {
+                    Assign(startRefine, s.s, stepSize * F(0.5f));
+                    Assign(startRefine, s.tb, s.tBelow - s.s);
+                    refineNext = refineNext || startRefine;
+                } else if constexpr (R == Refinement::Pom) {
+                    Assign(startRefine, s.tResult,
+                           SecantPoint(s.tAbove, s.hAbove, s.tBelow, s.hBelow));
+                    Assign(startRefine, s.nRefine, one);
+                    Assign(startRefine, s.phase, F(float(kDone)));
+                } else {
+                    Assign(startRefine, s.t1, s.tAbove);
+                    Assign(startRefine, s.h1, s.hAbove);
+                    Assign(startRefine, s.t2, s.tBelow);
+                    Assign(startRefine, s.h2, s.hBelow);
+                    Assign(startRefine, s.tInt, s.t2);
+                    Assign(startRefine, s.best, s.t2);
+                    s.converged = s.converged && !startRefine;
+                    refineNext = refineNext || startRefine;
+                }
+            }
+        }
+        if constexpr (R != Refinement::None && R != Refinement::Pom) {
+            // The top of the refinement loop.
+            if (Any(refineNext)) {
+                Assign(refineNext, s.phase, F(float(kDone)));
+                M go = refineNext && (s.k < F(float(p.refineSteps)));
+                if constexpr (R == Refinement::Binary) {
+                    Assign(refineNext, s.tResult, s.tb);
+                    Assign(go, tq, s.tb);
+                } else if constexpr (R == Refinement::Interval) {
+                    Assign(refineNext, s.tResult, s.tInt);
+                    Assign(go, s.tInt, SecantPoint(s.t1, s.h1, s.t2, s.h2));
+                    Assign(go, s.tResult, s.tInt);
+                    Assign(go, tq, s.tInt);
+                } else {  // Secant
+                    Assign(refineNext, s.tResult, s.best);
+                    if (p.earlyExit) go = go && !s.converged;
+                    Assign(go, s.tInt, SecantPoint(s.t1, s.h1, s.t2, s.h2));
+                    Assign(go, tq, s.tInt);
+                }
+                Assign(go, s.phase, F(float(kRefine)));
+                want = want || go;
+            }
+        }
+        next.t = tq;
+        next.u = ray.U(tq);
+        next.v = ray.V(tq);
+        return want;
+    }
+
+    template <class L>
+    static void End(const Params&, const LaneRay<L>& ray, const State<L>& s,
+                    LaneOutcome<L>& out) {
+        out.u = ray.U(s.tResult);
+        out.v = ray.V(s.tResult);
+        out.depth = s.tResult;
+        out.nCoarse = s.nCoarse;
+        out.nRefine = s.nRefine;
+        out.hit = s.found;
+    }
+
   private:
-    static MarchResult& Finish(MarchResult& r, const MarchInput& in, float t,
-                               const FetchBudget& budget) {
-        r.uvHit = At(in, t);
-        r.depthHit = t;
-        r.budgetExhausted = budget.Exhausted();
-        return r;
-    }
-
-    // Alg. 2: bisection of [linearT - stepSize, linearT], returning the last (unsampled)
-    // point.
-    template <HeightSampler S>
-    float Binary(const MarchInput& in, S& heights, float stepSize, float linearT,
-                 FetchBudget& budget, MarchResult& r) const {
-        float s = stepSize * 0.5f;
-        float t = linearT - s;
-        for (int k = 0; k < params.refineSteps; ++k) {
-            if (!budget.Take()) break;
-            ++r.nRefine;
-            float h = heights.Sample(At(in, t));
-            s = s * 0.5f;
-            t = t >= h ? t - s : t + s;
-        }
-        return t;
-    }
-
     // Replaces the bracket end on the same side of the surface as the sample (t, h).
-    static void Narrow(float t, float h, float& t1, float& h1, float& t2, float& h2) {
-        if (t >= h) {
-            t2 = t;
-            h2 = h;
-        } else {
-            t1 = t;
-            h1 = h;
-        }
-    }
-
-    // Alg. 3 with a bracket-preserving update; returns the last intersection point.
-    template <HeightSampler S>
-    float Interval(const MarchInput& in, S& heights, float t1, float h1, float t2,
-                   float h2, FetchBudget& budget, MarchResult& r) const {
-        float tInt = t2;
-        for (int k = 0; k < params.refineSteps; ++k) {
-            tInt = SecantPoint(t1, h1, t2, h2);
-            if (!budget.Take()) break;
-            ++r.nRefine;
-            Narrow(tInt, heights.Sample(At(in, tInt)), t1, h1, t2, h2);
-        }
-        return tInt;
-    }
-
-    // Risser's listing: iterate the secant point until the sampled depth is within the
-    // tolerance of the ray's depth there; the answer is the ray point at the depth
-    // sampled last.
-    template <HeightSampler S>
-    float Secant(const MarchInput& in, S& heights, float t1, float h1, float t2, float h2,
-                 FetchBudget& budget, MarchResult& r) const {
-        float best = t2;
-        bool converged = false;
-        for (int k = 0; k < params.refineSteps; ++k) {
-            if (converged && params.earlyExit) break;
-            float tInt = SecantPoint(t1, h1, t2, h2);
-            if (!budget.Take()) break;
-            ++r.nRefine;
-            float h = heights.Sample(At(in, tInt));
-            if (converged) continue;
-            Narrow(tInt, h, t1, h1, t2, h2);
-            best = h;
-            converged = std::fabs(h - tInt) <= params.secantTolerance;
-        }
-        return best;
+    template <class M, class F, class S>
+    static void Narrow(const M& m, const F& t, const F& h, S& s) {
+        const M below = m && (t >= h), above = m && !(t >= h);
+        Assign(below, s.t2, t);
+        Assign(below, s.h2, h);
+        Assign(above, s.t1, t);
+        Assign(above, s.h1, h);
     }
 };
+
+using LinearKernel = LinearSearch<Refinement::None>;
+using ReliefKernel = LinearSearch<Refinement::Binary>;
+using SecantKernel = LinearSearch<Refinement::Secant>;
+using IntervalKernel = LinearSearch<Refinement::Interval>;
+using PomKernel = LinearSearch<Refinement::Pom>;
 
 }  // namespace reliefsim

@@ -1,54 +1,78 @@
-// The method registry: name -> kernel, its parameters (defaults, ranges) and the maps it
-// needs.
+// The kernel catalogue: the one list of kernels, and what is derived from it (method
+// lookup, parameter validation, a configured kernel, dispatch on its type).
+//
+// Adding a kernel = its header (a type with the shape of kernels/kernel.h), its GLSL
+// twin, one entry in KernelTypes below, its tests and its docs page (docs/kernels.md).
 #pragma once
 
-#include <map>
+#include <span>
 #include <string>
 #include <string_view>
-#include <variant>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
+#include "kernels/kernel.h"
 #include "kernels/linear_search.h"
 
 namespace reliefsim {
 
-/// A numeric kernel parameter as given to `--set name=value`.
-struct ParamDef {
-    std::string name;
-    double defaultValue;
-    double minValue, maxValue;  ///< inclusive valid range
-    bool integer;               ///< integers only (booleans are integers in [0,1])
-    std::string help;
+template <class... K>
+struct KernelList {
+    static constexpr int kCount = int(sizeof...(K));
 };
 
-/// One method of the catalogue.
-struct MethodInfo {
-    std::string name;    ///< the --method name
-    std::string title;   ///< one line
-    std::string source;  ///< paper and equation / algorithm numbers
-    std::vector<ParamDef> params;
-    std::vector<std::string> maps;  ///< derived maps it needs besides the height map
-};
+/// Every kernel, in catalogue order (the order of `reliefsim methods`).
+using KernelTypes =
+    KernelList<LinearKernel, ReliefKernel, SecantKernel, IntervalKernel, PomKernel>;
+
+using MethodInfo = KernelInfo;
+using ParamDef = ParamSpec;
 
 /// Every method, in catalogue order.
-const std::vector<MethodInfo>& Methods();
+std::span<const KernelInfo* const> Methods();
 
 /// The method named `name`; throws Error listing the valid names otherwise.
-const MethodInfo& FindMethod(std::string_view name);
-
-/// Parameter values by name: every parameter of the method, defaults filled in.
-using ParamValues = std::map<std::string, double>;
+const KernelInfo& FindMethod(std::string_view name);
 
 /// Validates "key=value" settings against the method (unknown key, not a number, not an
 /// integer, out of range: one Error naming the culprit and the valid set) and fills
 /// defaults.
-ParamValues ResolveParams(const MethodInfo& method,
+ParamValues ResolveParams(const KernelInfo& method,
                           const std::vector<std::string>& settings);
 
-/// A configured kernel. Dispatch happens once per frame or tile via std::visit.
-using Kernel = std::variant<LinearSearchKernel>;
+/// A configured kernel: which one (its index in KernelTypes) and its resolved parameters.
+struct Kernel {
+    int index = 0;
+    ParamValues values;
+    const KernelInfo& Info() const { return *Methods()[size_t(index)]; }
+    uint32_t Budget() const;  ///< the "budget" parameter (0 = none)
+};
 
-/// Builds the kernel for a method from resolved parameters.
-Kernel MakeKernel(const MethodInfo& method, const ParamValues& values);
+/// The kernel for a method from resolved parameters.
+Kernel MakeKernel(const KernelInfo& method, const ParamValues& values);
+
+namespace detail {
+template <class Fn, class... K>
+decltype(auto) VisitKernelIn(KernelList<K...>, int index, Fn&& fn) {
+    using R =
+        decltype(fn(std::type_identity<std::tuple_element_t<0, std::tuple<K...>>>{}));
+    if constexpr (std::is_void_v<R>) {
+        int i = 0;
+        ((i++ == index ? (fn(std::type_identity<K>{}), true) : false) || ...);
+    } else {
+        R r{};
+        int i = 0;
+        ((i++ == index ? (r = fn(std::type_identity<K>{}), true) : false) || ...);
+        return r;
+    }
+}
+}  // namespace detail
+
+/// Calls fn(std::type_identity<K>{}) for the kernel type K at `index` of KernelTypes.
+template <class Fn>
+decltype(auto) VisitKernelType(int index, Fn&& fn) {
+    return detail::VisitKernelIn(KernelTypes{}, index, std::forward<Fn>(fn));
+}
 
 }  // namespace reliefsim

@@ -68,6 +68,18 @@ inline int TileCount(int width, int height) {
     return TileCountX(width) * TileCountY(height);
 }
 
+/// Whether a fragment program reads the interpolated attributes of QuadFragment (uv,
+/// worldPos, tangent frame). A program that computes its own inputs from the pixel
+/// declares `static constexpr bool kReadsAttributes = false;` and the rasterizer then
+/// interpolates only what the depth test needs.
+template <class Program>
+constexpr bool ReadsAttributes() {
+    if constexpr (requires { Program::kReadsAttributes; })
+        return Program::kReadsAttributes;
+    else
+        return true;
+}
+
 namespace detail {
 
 /// A triangle after clipping, in fixed point, ready for the tile loop. Edge k (from
@@ -115,10 +127,18 @@ class DenormalsAreZeroScope {
     DenormalsAreZeroScope& operator=(const DenormalsAreZeroScope&) = delete;
 };
 
-/// Fills the attributes of all four lanes of a quad.
+/// Fills the attributes of all four lanes of a quad (kAttributes = false: depth only).
+template <bool kAttributes = true>
 inline void InterpolateQuad(const SetupTriangle& tri, const int64_t (&e)[4][3],
                             QuadFragment& frag) {
     for (int lane = 0; lane < 4; ++lane) {
+        if constexpr (!kAttributes) {
+            const glm::vec3 bary(float(e[lane][1] + tri.unbias[1]) * tri.invArea,
+                                 float(e[lane][2] + tri.unbias[2]) * tri.invArea,
+                                 float(e[lane][0] + tri.unbias[0]) * tri.invArea);
+            frag.depth[lane] = Interpolate(bary, tri.depth.x, tri.depth.y, tri.depth.z);
+            continue;
+        }
         // Window-space barycentrics: vertex 2 is opposite edge 0, vertex 0 opposite edge
         // 1, vertex 1 opposite edge 2.
         const glm::vec3 bary(float(e[lane][1] + tri.unbias[1]) * tri.invArea,
@@ -173,7 +193,7 @@ void RasterizeTriangleInTile(const SetupTriangle& tri, int x0, int y0, int x1, i
             if (mask == 0) continue;
             bool interpolated = false;
             if (depthBuffer) {
-                InterpolateQuad(tri, e, frag);
+                InterpolateQuad<ReadsAttributes<Program>()>(tri, e, frag);
                 interpolated = true;
                 for (int lane = 0; lane < 4; ++lane) {
                     if (!(mask & (1u << lane))) continue;
@@ -187,7 +207,7 @@ void RasterizeTriangleInTile(const SetupTriangle& tri, int x0, int y0, int x1, i
                 }
                 if (mask == 0) continue;
             }
-            if (!interpolated) InterpolateQuad(tri, e, frag);
+            if (!interpolated) InterpolateQuad<ReadsAttributes<Program>()>(tri, e, frag);
             frag.pixel0 = glm::ivec2(qx, qy);
             frag.coveredMask = mask;
             frag.inImageMask = inImage;
@@ -247,6 +267,8 @@ RasterStats RasterizeTile(const FrameSetup& setup, int tileIndex, int width, int
             RasterizeTriangleInTile<true>(tri, x0, y0, x1, y1, width, height, tileX0,
                                           tileY0, depthBuffer, program, tileIndex, stats);
         }
+        if constexpr (requires { program.EndTriangleInTile(tileIndex); })
+            program.EndTriangleInTile(tileIndex);
     }
     return stats;
 }
@@ -263,7 +285,10 @@ RasterStats RasterizeTile(const FrameSetup& setup, int tileIndex, int width, int
 /// functions cannot overflow. Then tbb::parallel_for runs over tiles; each tile takes its
 /// triangles in submission order, walks 2x2 quads over bbox ∩ tile and calls
 ///     program.ShadeQuad(const QuadFragment&, int tileIndex)
-/// for every quad with at least one covered lane. Both faces are drawn; zero-area
+/// for every quad with at least one covered lane, and, when the program has it,
+///     program.EndTriangleInTile(int tileIndex)
+/// after the quads of each triangle in each tile (a program that batches quads runs them
+/// there, in order). Both faces are drawn; zero-area
 /// triangles draw nothing.
 ///
 /// Conventions:

@@ -50,3 +50,13 @@ std::optional<WrapMode> ParseWrapMode(std::string_view s) {
 }
 
 }  // namespace reliefsim
+
+namespace reliefsim {
+
+float SampleCounted(const HeightField& field, const SamplerState& state, float u, float v,
+                    FetchCounts* counts) {
+    Sampler<true> sampler(field, state, counts);
+    return sampler.Sample(glm::vec2(u, v));
+}
+
+}  // namespace reliefsim

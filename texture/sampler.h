@@ -288,4 +288,10 @@ class Sampler {
 
 using CountingSampler = Sampler<true>;
 
+/// One counted fetch with the state's filter, out of line: the lane sampler's path for
+/// the filters it does not run on lanes (compiled once, with the project's default
+/// flags).
+float SampleCounted(const HeightField& field, const SamplerState& state, float u, float v,
+                    FetchCounts* counts);
+
 }  // namespace reliefsim

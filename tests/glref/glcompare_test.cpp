@@ -83,8 +83,8 @@ std::vector<Case> AllCases() {
         for (int size : {256, 512})
             for (const char* map :
                  {"builtin:shapes", "builtin:bumps", "builtin:steps", "builtin:noise"})
-                for (const MethodInfo& m : Methods())
-                    cases.push_back({m.name, map, size, format});
+                for (const KernelInfo* m : Methods())
+                    cases.push_back({std::string(m->name), map, size, format});
     return cases;
 }
 
@@ -190,12 +190,14 @@ TEST(GlCompare, SamplerModesParametersAndViewsAreBitIdentical) {
          128,
          128},
     };
-    for (const MethodInfo& m : Methods()) {
+    for (const KernelInfo* info : Methods()) {
+        const KernelInfo& m = *info;
         for (const Variant& v : variants) {
-            SCOPED_TRACE(
-                m.name + " on " + v.map + " filter " + std::string(ToString(v.filter)) +
-                " wrap " + std::string(ToString(v.wrap)) + " " +
-                std::string(ToString(v.format)) + (v.set.empty() ? "" : " " + v.set[0]));
+            SCOPED_TRACE(std::string(m.name) + " on " + v.map + " filter " +
+                         std::string(ToString(v.filter)) + " wrap " +
+                         std::string(ToString(v.wrap)) + " " +
+                         std::string(ToString(v.format)) +
+                         (v.set.empty() ? "" : " " + v.set[0]));
             RenderSettings s;
             s.method = m.name;
             s.set = v.set;

@@ -1,10 +1,12 @@
 // Kernels on analytic maps: closed-form hits, exact fetch counts, refinement convergence.
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
 
-#include "kernels/linear_search.h"
+#include "kernels/registry.h"
 #include "kernels/view_ray.h"
+#include "render/batch.h"
 #include "texture/procedural.h"
 #include "texture/sampler.h"
 
@@ -20,15 +22,34 @@ HeightField Constant(float depth, int n = 64) {
     return f;
 }
 
-LinearSearchKernel Kernel(Refinement r, int linear, int refine, bool earlyExit = true,
-                          uint32_t budget = 0) {
-    LinearSearchKernel k;
-    k.params.refinement = r;
-    k.params.linearSteps = linear;
-    k.params.refineSteps = refine;
-    k.params.earlyExit = earlyExit;
-    k.params.budget = budget;
-    return k;
+// A linear-search kernel configured as the command line would configure it.
+struct TestKernel {
+    Refinement refinement;
+    int linearSteps, refineSteps;
+    bool earlyExit = true;
+    uint32_t budget = 0;
+    float secantTolerance = 0.01f;
+};
+
+TestKernel Configure(Refinement r, int linear, int refine, bool earlyExit = true,
+                     uint32_t budget = 0) {
+    return {r, linear, refine, earlyExit, budget};
+}
+
+const char* MethodName(Refinement r) {
+    switch (r) {
+        case Refinement::None:
+            return "linear";
+        case Refinement::Binary:
+            return "relief";
+        case Refinement::Interval:
+            return "interval";
+        case Refinement::Secant:
+            return "secant";
+        case Refinement::Pom:
+            return "pom";
+    }
+    return "";
 }
 
 struct MarchRun {
@@ -36,12 +57,43 @@ struct MarchRun {
     FetchCounts counts;
 };
 
-MarchRun March(const LinearSearchKernel& k, const HeightField& f, MarchInput in,
+// Runs the ray through the driver's single-lane reference, and through every other lane
+// width this CPU runs (as lane 0 of a pack), which must agree bit for bit.
+MarchRun March(const TestKernel& k, const HeightField& f, MarchInput in,
                SamplerState st = {}) {
-    MarchRun r;
-    Sampler<true> s(f, st, &r.counts);
-    r.result = k.March(in, s);
-    return r;
+    const KernelInfo& info = FindMethod(MethodName(k.refinement));
+    ParamValues values = ResolveParams(info, {});
+    values["linear_steps"] = k.linearSteps;
+    if (values.count("refine_steps")) values["refine_steps"] = k.refineSteps;
+    if (values.count("secant_tolerance")) values["secant_tolerance"] = k.secantTolerance;
+    values["early_exit"] = k.earlyExit ? 1 : 0;
+    values["budget"] = k.budget;
+    std::shared_ptr<const void> params;
+    const BatchJob job =
+        MakeBatchJob(reliefsim::MakeKernel(info, values), {&f, st}, params);
+    const RayRun one = MarchRay(job, in);
+    for (const LaneWidthInfo& w : LaneWidths()) {
+        if (!w.supported) continue;
+        float u, v, depth;
+        uint16_t nc, nr;
+        uint32_t fetches, texels;
+        uint8_t flags;
+        LaneBatch b;
+        b.n = 1;
+        b.uEntry = &in.uvEntry.x, b.vEntry = &in.uvEntry.y;
+        b.du = &in.dirUv.x, b.dv = &in.dirUv.y;
+        b.u = &u, b.v = &v, b.depth = &depth, b.nCoarse = &nc, b.nRefine = &nr;
+        b.fetches = &fetches, b.texelReads = &texels, b.flags = &flags;
+        w.fn(job, b);
+        EXPECT_EQ(std::bit_cast<uint32_t>(u), std::bit_cast<uint32_t>(one.result.uvHit.x))
+            << w.width;
+        EXPECT_EQ(std::bit_cast<uint32_t>(depth),
+                  std::bit_cast<uint32_t>(one.result.depthHit))
+            << w.width;
+        EXPECT_EQ(fetches, one.counts.nFetches) << w.width;
+        EXPECT_EQ(nr, one.result.nRefine) << w.width;
+    }
+    return {one.result, one.counts};
 }
 
 // Ray over the ramp field depth(u) = u (bilinear, clamp; exact for u in [0.5/W, 1 -
@@ -53,7 +105,7 @@ constexpr SamplerState kClampBilinear{Filter::Bilinear, WrapMode::Clamp};
 TEST(LinearSearch, FlatPlaneHitsAtItsDepth) {
     HeightField f = Constant(0.5f);
     MarchInput in{{0.3f, 0.4f}, {0.2f, -0.1f}};
-    MarchRun r = March(Kernel(Refinement::None, 32, 0), f, in);
+    MarchRun r = March(Configure(Refinement::None, 32, 0), f, in);
     EXPECT_TRUE(r.result.hit);
     EXPECT_EQ(r.result.depthHit, 0.5f);  // 16/32 is on the sample grid
     EXPECT_EQ(r.result.nCoarse, 17);     // t = 0, 1/32, ..., 16/32
@@ -67,7 +119,7 @@ TEST(LinearSearch, MapNeverHitCostsExactlyNFetches) {
     HeightField f = Constant(1.0f);  // the bottom: samples stop at t = (N-1)/N
     for (int n : {1, 5, 32, 100}) {
         MarchRun r =
-            March(Kernel(Refinement::None, n, 0), f, {{0.1f, 0.1f}, {0.3f, 0.2f}});
+            March(Configure(Refinement::None, n, 0), f, {{0.1f, 0.1f}, {0.3f, 0.2f}});
         EXPECT_FALSE(r.result.hit);
         EXPECT_EQ(r.counts.nFetches, uint32_t(n));
         EXPECT_EQ(r.result.nCoarse, n);
@@ -79,8 +131,8 @@ TEST(LinearSearch, MapNeverHitCostsExactlyNFetches) {
 TEST(LinearSearch, FixedLoopsFetchEveryStepButLatchTheHit) {
     HeightField f = Constant(0.25f);
     MarchInput in{{0.5f, 0.5f}, {0.1f, 0.1f}};
-    MarchRun brk = March(Kernel(Refinement::None, 16, 0, true), f, in);
-    MarchRun fixed = March(Kernel(Refinement::None, 16, 0, false), f, in);
+    MarchRun brk = March(Configure(Refinement::None, 16, 0, true), f, in);
+    MarchRun fixed = March(Configure(Refinement::None, 16, 0, false), f, in);
     EXPECT_EQ(brk.counts.nFetches, 5u);  // t = 0 .. 4/16
     EXPECT_EQ(fixed.counts.nFetches, 16u);
     EXPECT_EQ(fixed.result.nCoarse, 16);
@@ -90,14 +142,14 @@ TEST(LinearSearch, FixedLoopsFetchEveryStepButLatchTheHit) {
 
 TEST(LinearSearch, BudgetStopsAndFlags) {
     HeightField f = Constant(0.9f);
-    MarchRun r = March(Kernel(Refinement::Binary, 32, 6, true, 10), f,
+    MarchRun r = March(Configure(Refinement::Binary, 32, 6, true, 10), f,
                        {{0.2f, 0.2f}, {0.1f, 0.0f}});
     EXPECT_TRUE(r.result.budgetExhausted);
     EXPECT_EQ(r.counts.nFetches, 10u);
     EXPECT_EQ(r.result.nCoarse, 10);
     EXPECT_FALSE(r.result.hit);
     // A budget that is never reached flags nothing.
-    MarchRun ok = March(Kernel(Refinement::Binary, 32, 6, true, 1000), f,
+    MarchRun ok = March(Configure(Refinement::Binary, 32, 6, true, 1000), f,
                         {{0.2f, 0.2f}, {0.1f, 0.0f}});
     EXPECT_FALSE(ok.result.budgetExhausted);
     EXPECT_EQ(ok.counts.nFetches, 30u + 6u);  // hit at t = 29/32 (30 samples) + 6 binary
@@ -106,7 +158,7 @@ TEST(LinearSearch, BudgetStopsAndFlags) {
 TEST(LinearSearch, HitAtTopIsExactWithoutRefinement) {
     HeightField f = Constant(0.0f);
     MarchRun r =
-        March(Kernel(Refinement::Binary, 32, 6), f, {{0.2f, 0.2f}, {0.4f, 0.1f}});
+        March(Configure(Refinement::Binary, 32, 6), f, {{0.2f, 0.2f}, {0.4f, 0.1f}});
     EXPECT_TRUE(r.result.hit);
     EXPECT_EQ(r.result.depthHit, 0.0f);
     EXPECT_EQ(r.counts.nFetches, 1u);
@@ -116,7 +168,7 @@ TEST(LinearSearch, HitAtTopIsExactWithoutRefinement) {
 TEST(Relief, FlatPlaneErrorBoundedByBisection) {
     HeightField f = Constant(0.53f);
     for (int refine : {0, 1, 2, 4, 8}) {
-        MarchRun r = March(Kernel(Refinement::Binary, 16, refine), f,
+        MarchRun r = March(Configure(Refinement::Binary, 16, refine), f,
                            {{0.3f, 0.3f}, {0.2f, 0.2f}});
         float bound = (1.0f / 16.0f) / float(1 << (refine + 1));
         EXPECT_LE(std::fabs(r.result.depthHit - 0.53f), bound) << refine;
@@ -129,7 +181,7 @@ TEST(Relief, SlantedPlaneMatchesClosedForm) {
     HeightField f = MakeBuiltinMap("ramp", 256, 4);
     MarchInput in{{0.6f, 0.5f}, {-0.3f, 0.0f}};
     const float tStar = 0.6f / 1.3f;
-    MarchRun r = March(Kernel(Refinement::Binary, 32, 10), f, in, kClampBilinear);
+    MarchRun r = March(Configure(Refinement::Binary, 32, 10), f, in, kClampBilinear);
     EXPECT_NEAR(r.result.depthHit, tStar, (1.0f / 32.0f) / 2048.0f + 1e-6f);
     EXPECT_NEAR(r.result.uvHit.x, 0.6f - 0.3f * tStar, 1e-4f);
 }
@@ -144,7 +196,7 @@ TEST(Relief, ErrorHalvesPerBinaryStep) {
             float u0 = 0.3f + 0.6f * float(k) / 500.0f;
             float dx = -0.25f - 0.1f * float(k % 7) / 7.0f;
             double tStar = double(u0) / (1.0 - double(dx));
-            MarchRun r = March(Kernel(Refinement::Binary, 16, refine), f,
+            MarchRun r = March(Configure(Refinement::Binary, 16, refine), f,
                                {{u0, 0.5f}, {dx, 0.0f}}, kClampBilinear);
             sum += std::fabs(double(r.result.depthHit) - tStar);
             ++n;
@@ -162,7 +214,7 @@ TEST(Relief, ErrorHalvesPerBinaryStep) {
 TEST(Interval, SlantedPlaneIsExactAfterOneStep) {
     HeightField f = MakeBuiltinMap("ramp", 256, 4);
     MarchInput in{{0.6f, 0.5f}, {-0.3f, 0.0f}};
-    MarchRun r = March(Kernel(Refinement::Interval, 16, 1), f, in, kClampBilinear);
+    MarchRun r = March(Configure(Refinement::Interval, 16, 1), f, in, kClampBilinear);
     EXPECT_NEAR(r.result.depthHit, 0.6f / 1.3f, 2e-6f);
     EXPECT_EQ(r.result.nRefine, 1);
 }
@@ -170,8 +222,8 @@ TEST(Interval, SlantedPlaneIsExactAfterOneStep) {
 TEST(Pom, OneSecantStepWithoutFetch) {
     HeightField f = MakeBuiltinMap("ramp", 256, 4);
     MarchInput in{{0.6f, 0.5f}, {-0.3f, 0.0f}};
-    MarchRun lin = March(Kernel(Refinement::None, 16, 0), f, in, kClampBilinear);
-    MarchRun pom = March(Kernel(Refinement::Pom, 16, 0), f, in, kClampBilinear);
+    MarchRun lin = March(Configure(Refinement::None, 16, 0), f, in, kClampBilinear);
+    MarchRun pom = March(Configure(Refinement::Pom, 16, 0), f, in, kClampBilinear);
     EXPECT_EQ(pom.counts.nFetches, lin.counts.nFetches);
     EXPECT_EQ(pom.result.nRefine, 1);
     EXPECT_NEAR(pom.result.depthHit, 0.6f / 1.3f, 2e-6f);
@@ -179,9 +231,9 @@ TEST(Pom, OneSecantStepWithoutFetch) {
 
 TEST(Secant, ConvergesWithinToleranceAndStops) {
     HeightField f = MakeBuiltinMap("bumps", 256, 256);
-    LinearSearchKernel k = Kernel(Refinement::Secant, 32, 10);
-    k.params.secantTolerance = 1e-4f;
-    LinearSearchKernel dense = Kernel(Refinement::Binary, 1024, 20);
+    TestKernel k = Configure(Refinement::Secant, 32, 10);
+    k.secantTolerance = 1e-4f;
+    TestKernel dense = Configure(Refinement::Binary, 1024, 20);
     int converged = 0;
     for (int i = 0; i < 200; ++i) {
         MarchInput in{{float(i) / 200.0f, 0.37f}, {0.35f, 0.12f}};
@@ -203,7 +255,7 @@ TEST(Secant, ConvergesWithinToleranceAndStops) {
 TEST(Secant, FlatPlaneConvergesInOneIteration) {
     HeightField f = Constant(0.4f);
     MarchRun r =
-        March(Kernel(Refinement::Secant, 10, 10), f, {{0.5f, 0.5f}, {0.3f, 0.0f}});
+        March(Configure(Refinement::Secant, 10, 10), f, {{0.5f, 0.5f}, {0.3f, 0.0f}});
     EXPECT_EQ(r.result.nRefine, 1);
     EXPECT_NEAR(r.result.depthHit, 0.4f, 1e-6f);
 }
@@ -215,7 +267,7 @@ TEST(LinearSearch, StepEdgeHitsTheWall) {
     HeightField f = MakeBuiltinMap("step", 256, 4);
     MarchInput in{{0.6f, 0.5f}, {-0.5f, 0.0f}};
     SamplerState nearest{Filter::Nearest, WrapMode::Clamp};
-    MarchRun relief = March(Kernel(Refinement::Binary, 32, 12), f, in, nearest);
+    MarchRun relief = March(Configure(Refinement::Binary, 32, 12), f, in, nearest);
     EXPECT_NEAR(relief.result.depthHit, 0.2f, (1.0f / 32.0f) / 4096.0f + 1e-6f);
     EXPECT_NEAR(relief.result.uvHit.x, 0.5f, 1e-3f);
 }
@@ -225,7 +277,7 @@ TEST(LinearSearch, GrazingRaysTerminateFinite) {
     for (float big : {1e3f, 1e6f, 1e9f}) {
         for (Refinement r : {Refinement::None, Refinement::Binary, Refinement::Interval,
                              Refinement::Secant, Refinement::Pom}) {
-            MarchRun run = March(Kernel(r, 32, 8), f, {{0.5f, 0.5f}, {big, -big}});
+            MarchRun run = March(Configure(r, 32, 8), f, {{0.5f, 0.5f}, {big, -big}});
             EXPECT_TRUE(std::isfinite(run.result.depthHit));
             EXPECT_TRUE(std::isfinite(run.result.uvHit.x));
             EXPECT_LE(run.counts.nFetches, 32u + 9u);

@@ -30,9 +30,36 @@ TEST(Registry, DefaultsAndOverrides) {
     EXPECT_EQ(v.at("refine_steps"), 3);
     EXPECT_EQ(v.at("budget"), 0);
     Kernel k = MakeKernel(m, v);
-    const auto& lk = std::get<LinearSearchKernel>(k);
-    EXPECT_EQ(lk.params.linearSteps, 10);
-    EXPECT_EQ(lk.params.refinement, Refinement::Binary);
+    EXPECT_EQ(&k.Info(), &m);
+    const bool isRelief = VisitKernelType(k.index, [](auto type) {
+        return std::is_same_v<typename decltype(type)::type, ReliefKernel>;
+    });
+    EXPECT_TRUE(isRelief);
+    const ReliefKernel::Params p = ReliefKernel::FromValues(k.values);
+    EXPECT_EQ(p.linearSteps, 10);
+    EXPECT_EQ(p.refineSteps, 3);
+}
+
+// The catalogue is derived from the type list: every kernel's self-description is
+// complete and its parameters' defaults lie in their ranges, with a uniform for the GLSL
+// twin.
+TEST(Registry, EveryKernelDescribesItself) {
+    ASSERT_EQ(int(Methods().size()), KernelTypes::kCount);
+    for (const KernelInfo* m : Methods()) {
+        EXPECT_FALSE(m->name.empty());
+        EXPECT_FALSE(m->title.empty()) << m->name;
+        EXPECT_FALSE(m->source.empty()) << m->name;
+        EXPECT_FALSE(m->glslFile.empty()) << m->name;
+        EXPECT_EQ(&FindMethod(m->name), m);
+        bool hasBudget = false;
+        for (const ParamSpec& p : m->params) {
+            EXPECT_LE(p.minValue, p.defaultValue) << m->name << " " << p.name;
+            EXPECT_LE(p.defaultValue, p.maxValue) << m->name << " " << p.name;
+            EXPECT_FALSE(p.uniform.empty()) << m->name << " " << p.name;
+            hasBudget = hasBudget || p.name == "budget";
+        }
+        EXPECT_TRUE(hasBudget) << m->name;  // the driver reads it
+    }
 }
 
 TEST(Registry, BadSettingsNameTheCulprit) {

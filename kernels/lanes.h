@@ -1,0 +1,75 @@
+// Lane types: what a lane-generic kernel computes with. One kernel source instantiates at 1
+// lane (the reference), 8 lanes (AVX2) and 16 lanes (AVX-512); docs/architecture.md.
+//
+// A lane pack L gives F (float per lane) and M (a per-lane mask of F). Kernels keep every
+// per-lane value, counters included, in F: counts stay far below 2^24, where float integers
+// are exact, and one mask type serves every select. Integer lanes (I) appear only inside the
+// samplers' texel addressing.
+//
+// The pack carries an ISA tag: each translation unit compiled with its own target flags
+// (render/driver_*.cpp) instantiates kernels with its own tag, so instantiations compiled
+// for AVX-512 never merge with those of the baseline build (std::experimental::simd keys its
+// internals on the target flags likewise).
+#pragma once
+
+#include <cstdint>
+#include <experimental/simd>
+
+#include "core/error.h"
+
+namespace reliefsim {
+
+namespace stdx = std::experimental;
+
+/// The ISA tag of code compiled with the project's default flags.
+struct BaselineIsa {};
+
+template <int N, class Isa = BaselineIsa>
+struct Lanes {
+    static constexpr int kWidth = N;
+    using F = stdx::fixed_size_simd<float, N>;
+    using I = stdx::fixed_size_simd<int32_t, N>;
+    using M = typename F::mask_type;
+    using IM = typename I::mask_type;
+};
+
+/// a where m, else b.
+template <class V, class Mask>
+RS_INLINE V Select(const Mask& m, const V& a, const V& b) {
+    V r = b;
+    stdx::where(m, r) = a;
+    return r;
+}
+
+/// dst = v where m.
+template <class V, class Mask>
+RS_INLINE void Assign(const Mask& m, V& dst, const V& v) {
+    stdx::where(m, dst) = v;
+}
+
+/// a < b ? a : b per lane (SSE minps: the second operand when either is NaN), as llvmpipe's
+/// generated code computes min; not stdx::min, whose NaN rule differs.
+template <class V>
+RS_INLINE V MinSse(const V& a, const V& b) {
+    return Select(a < b, a, b);
+}
+template <class V>
+RS_INLINE V MaxSse(const V& a, const V& b) {
+    return Select(a > b, a, b);
+}
+
+/// Float to int as cvttps2dq: truncation, INT_MIN where out of range or NaN.
+template <class L>
+RS_INLINE typename L::I TruncToIntLanes(typename L::F f) {
+    using F = typename L::F;
+    const auto inRange = (f >= F(-2147483648.0f)) && (f < F(2147483648.0f));
+    stdx::where(!inRange, f) = F(-2147483648.0f);
+    return stdx::static_simd_cast<typename L::I>(f);
+}
+
+template <class Mask>
+RS_INLINE bool Any(const Mask& m) {
+    return stdx::any_of(m);
+}
+
+}  // namespace reliefsim

@@ -1,0 +1,137 @@
+// Lane widths, runtime ISA dispatch, kernel parameters and the traced single-lane run.
+#include "render/batch.h"
+
+#include <memory>
+
+#include "core/error.h"
+#include "render/lane_driver.h"
+
+namespace reliefsim {
+
+#define RS_DECLARE_WIDTH(suffix)                                                        \
+    void RunBatch##suffix(const BatchJob& job, LaneBatch& batch);                       \
+    float SampleChain##suffix(const Textures& textures, const float* u, const float* v, \
+                              int n, int chain, uint64_t* texelReads);
+RS_DECLARE_WIDTH(W1)
+RS_DECLARE_WIDTH(W4)
+#if RS_HAVE_AVX2_UNIT
+RS_DECLARE_WIDTH(W8Avx2)
+#endif
+#if RS_HAVE_AVX512_UNIT
+RS_DECLARE_WIDTH(W16Avx512)
+#endif
+#undef RS_DECLARE_WIDTH
+
+namespace {
+
+bool CpuHas([[maybe_unused]] const char* what) {
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_cpu_init();
+    if (std::string_view(what) == "avx2")
+        return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+    if (std::string_view(what) == "avx512")
+        return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+               __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw") &&
+               __builtin_cpu_supports("fma");
+#endif
+    return false;
+}
+
+std::vector<LaneWidthInfo> MakeWidths() {
+    std::vector<LaneWidthInfo> w = {{1, "baseline", true, &RunBatchW1, &SampleChainW1},
+                                    {4, "baseline", true, &RunBatchW4, &SampleChainW4}};
+#if RS_HAVE_AVX2_UNIT
+    w.push_back({8, "avx2", CpuHas("avx2"), &RunBatchW8Avx2, &SampleChainW8Avx2});
+#endif
+#if RS_HAVE_AVX512_UNIT
+    w.push_back(
+        {16, "avx512", CpuHas("avx512"), &RunBatchW16Avx512, &SampleChainW16Avx512});
+#endif
+    return w;
+}
+
+struct TraceIsa {};
+
+}  // namespace
+
+std::span<const LaneWidthInfo> LaneWidths() {
+    static const std::vector<LaneWidthInfo> kWidths = MakeWidths();
+    return kWidths;
+}
+
+const LaneWidthInfo& PickLaneWidth(int width) {
+    const auto all = LaneWidths();
+    std::string valid;
+    for (const LaneWidthInfo& w : all) {
+        if (w.supported) valid += (valid.empty() ? "" : ", ") + std::to_string(w.width);
+    }
+    if (width == 0) {
+        const LaneWidthInfo* best = &all[0];
+        for (const LaneWidthInfo& w : all)
+            if (w.supported) best = &w;
+        return *best;
+    }
+    for (const LaneWidthInfo& w : all) {
+        if (w.width != width) continue;
+        if (!w.supported)
+            throw Error("--lanes " + std::to_string(width) + ": this CPU lacks " + w.isa +
+                        "; valid here: 0 (the widest), " + valid);
+        return w;
+    }
+    throw Error("--lanes " + std::to_string(width) +
+                ": not a lane width of this build; valid: 0 (the widest), " + valid);
+}
+
+std::shared_ptr<const void> MakeKernelParams(int kernelIndex, const ParamValues& values) {
+    return VisitKernelType(kernelIndex, [&](auto type) -> std::shared_ptr<const void> {
+        using K = typename decltype(type)::type;
+        return std::make_shared<typename K::Params>(K::FromValues(values));
+    });
+}
+
+void MarchTraced(const BatchJob& job, LaneBatch& b, const TraceSink& trace) {
+    using L = Lanes<1, TraceIsa>;
+    VisitKernelType(job.kernelIndex, [&](auto type) {
+        using K = typename decltype(type)::type;
+        const auto& params = *static_cast<const typename K::Params*>(job.params);
+        for (int base = 0; base < b.n; ++base)
+            detail::MarchPack<K, L>(
+                params, job, b, base,
+                [&](const L::M& active, const Fetch<L>& f, const L::F& sampled) {
+                    if (trace && active[0]) trace({f.u[0], f.v[0], f.t[0], sampled[0]});
+                });
+    });
+}
+
+RayRun MarchRay(const BatchJob& job, const MarchInput& in, const TraceSink& trace) {
+    RayRun run;
+    float u = 0, v = 0, depth = 0;
+    uint8_t flags = 0;
+    LaneBatch b;
+    b.n = 1;
+    b.uEntry = &in.uvEntry.x, b.vEntry = &in.uvEntry.y;
+    b.du = &in.dirUv.x, b.dv = &in.dirUv.y;
+    b.u = &u, b.v = &v, b.depth = &depth;
+    b.nCoarse = &run.result.nCoarse, b.nRefine = &run.result.nRefine;
+    b.fetches = &run.counts.nFetches, b.texelReads = &run.counts.nTexelReads;
+    b.flags = &flags;
+    MarchTraced(job, b, trace);
+    run.result.uvHit = glm::vec2(u, v);
+    run.result.depthHit = depth;
+    run.result.hit = !(flags & kFlagNoHit);
+    run.result.budgetExhausted = (flags & kFlagBudgetExhausted) != 0;
+    return run;
+}
+
+BatchJob MakeBatchJob(const Kernel& kernel, const Textures& textures,
+                      std::shared_ptr<const void>& params) {
+    params = MakeKernelParams(kernel.index, kernel.values);
+    BatchJob job;
+    job.kernelIndex = kernel.index;
+    job.params = params.get();
+    job.budget = kernel.Budget();
+    job.textures = textures;
+    return job;
+}
+
+}  // namespace reliefsim

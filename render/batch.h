@@ -1,0 +1,88 @@
+// Lane batches: the fragment driver's unit of work, and the choice of lane width and ISA.
+//
+// A batch is n rays in structure-of-arrays form. The driver runs them in packs of its
+// lane width (1, 4, 8 or 16), each pack until its last lane finishes, and writes per-lane
+// results. Each width lives in its own translation unit compiled for its ISA
+// (batch_w*.cpp); one binary picks the widest the CPU runs (PickLaneWidth). Results are
+// bit-identical for every width (tests/render/lane_width_test.cpp).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+
+#include "kernels/registry.h"
+#include "texture/lane_sampler.h"
+
+namespace reliefsim {
+
+/// n rays in, n results out (structure of arrays; the caller owns the memory).
+struct LaneBatch {
+    int n = 0;
+    const float *uEntry = nullptr, *vEntry = nullptr;    ///< MarchInput::uvEntry
+    const float *du = nullptr, *dv = nullptr;            ///< MarchInput::dirUv
+    float *u = nullptr, *v = nullptr, *depth = nullptr;  ///< returned point
+    uint16_t *nCoarse = nullptr, *nRefine = nullptr;
+    uint32_t *fetches = nullptr, *texelReads = nullptr;
+    uint8_t* flags = nullptr;  ///< kFlagNoHit | kFlagBudgetExhausted (core/record.h)
+};
+
+/// One fetch of a traced lane: where, at which ray depth, what came back.
+struct TracedFetch {
+    float u, v, t, sampled;
+};
+using TraceSink = std::function<void(const TracedFetch&)>;
+
+/// What every width's entry point receives: the kernel (its index in KernelTypes and its
+/// Params, built by MakeKernelParams), the fetch budget and the textures.
+struct BatchJob {
+    int kernelIndex = 0;
+    const void* params = nullptr;
+    uint32_t budget = 0;
+    Textures textures;
+};
+
+using BatchFn = void (*)(const BatchJob& job, LaneBatch& batch);
+
+/// The sampler microbenchmark's loop: n lanes each make `chain` dependent counted fetches
+/// (the next uv moves by the sampled value, so fetches cannot overlap within a lane, as
+/// in a kernel); returns a checksum and adds the texels read to *texelReads.
+using SampleChainFn = float (*)(const Textures& textures, const float* u, const float* v,
+                                int n, int chain, uint64_t* texelReads);
+
+/// The lane widths this binary has, in increasing order, and whether this CPU runs each.
+struct LaneWidthInfo {
+    int width;
+    const char* isa;  ///< "baseline" (x86-64 SSE2), "avx2" (with FMA), "avx512"
+    bool supported;
+    BatchFn fn;
+    SampleChainFn sampleChain;
+};
+std::span<const LaneWidthInfo> LaneWidths();
+
+/// The batch function of `width` lanes; 0 = the widest this CPU supports. Throws Error
+/// (naming --lanes) for a width the binary lacks or the CPU cannot run.
+const LaneWidthInfo& PickLaneWidth(int width);
+
+/// Kernel parameters as the kernel's Params, type-erased for BatchJob::params.
+std::shared_ptr<const void> MakeKernelParams(int kernelIndex, const ParamValues& values);
+
+/// One ray through the single-lane reference, with its result and counts; every fetch is
+/// reported to `trace` when set.
+struct RayRun {
+    MarchResult result;
+    FetchCounts counts;
+};
+RayRun MarchRay(const BatchJob& job, const MarchInput& in, const TraceSink& trace = {});
+
+/// A BatchJob for a configured kernel; `params` keeps its Params alive.
+BatchJob MakeBatchJob(const Kernel& kernel, const Textures& textures,
+                      std::shared_ptr<const void>& params);
+
+/// One ray, one lane, every fetch reported to `trace` (when set): the reference the trace
+/// commands use.
+void MarchTraced(const BatchJob& job, LaneBatch& batch, const TraceSink& trace);
+
+}  // namespace reliefsim
