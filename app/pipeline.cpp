@@ -108,28 +108,6 @@ Mesh TexturedPlane(float tiling) {
     return mesh;
 }
 
-// Shading of the hit (not part of the kernel's counts): Lambert with a normal from
-// central differences of the bilinear depth, albedo by depth.
-glm::vec3 Shade(const HeightField& field, const SamplerState& state, glm::vec2 uv,
-                float depth, float slopeScale, bool hit) {
-    Sampler<false> s(field, state);
-    const float du = 1.0f / float(field.width), dv = 1.0f / float(field.height);
-    float ddu =
-        (s.Sample(uv + glm::vec2(du, 0)) - s.Sample(uv - glm::vec2(du, 0))) / (2 * du);
-    float ddv =
-        (s.Sample(uv + glm::vec2(0, dv)) - s.Sample(uv - glm::vec2(0, dv))) / (2 * dv);
-    glm::vec3 n(ddu * slopeScale, ddv * slopeScale, 1.0f);
-    n = n * (1.0f / std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z));
-    glm::vec3 l(-0.4f, -0.5f, 0.77f);
-    l = l * (1.0f / std::sqrt(l.x * l.x + l.y * l.y + l.z * l.z));
-    float lambert = std::fmax(0.0f, n.x * l.x + n.y * l.y + n.z * l.z);
-    float d = std::fmin(std::fmax(depth, 0.0f), 1.0f);
-    glm::vec3 top(0.93f, 0.80f, 0.55f), deep(0.35f, 0.45f, 0.65f);
-    glm::vec3 albedo = top + (deep - top) * d;
-    if (!hit) albedo = glm::vec3(0.9f, 0.1f, 0.6f);  // no hit: magenta, as peers do
-    return albedo * (0.15f + 0.85f * lambert);
-}
-
 struct TileTotals {
     uint64_t helperLanes = 0, helperFetches = 0, helperTexelReads = 0;
     LaneCosts laneCost;
@@ -183,7 +161,8 @@ class FrameProgram {
     // the tile.
     struct Scratch {
         std::vector<PendingQuad> quads;
-        std::vector<float> in[4], u, v, depth;
+        std::vector<int32_t> px, py;
+        std::vector<float> u, v, depth, rgb;
         std::vector<uint16_t> nCoarse, nRefine;
         std::vector<uint32_t> fetches, texels;
         std::vector<uint8_t> flags;
@@ -199,24 +178,18 @@ class FrameProgram {
         const size_t nQuads = s.quads.size();
         if (nQuads == 0) return;
         const size_t n = 4 * nQuads;
-        for (auto& a : s.in) a.resize(n);
+        s.px.resize(n), s.py.resize(n), s.rgb.resize(3 * n);
         s.u.resize(n), s.v.resize(n), s.depth.resize(n), s.nCoarse.resize(n);
         s.nRefine.resize(n), s.fetches.resize(n), s.texels.resize(n), s.flags.resize(n);
         for (size_t q = 0; q < nQuads; ++q) {
             for (int k = 0; k < 4; ++k) {
-                const MarchInput in = PixelToRay(uniforms_, s.quads[q].pixel0.x + (k & 1),
-                                                 s.quads[q].pixel0.y + (k >> 1));
-                const size_t i = 4 * q + size_t(k);
-                s.in[0][i] = in.uvEntry.x;
-                s.in[1][i] = in.uvEntry.y;
-                s.in[2][i] = in.dirUv.x;
-                s.in[3][i] = in.dirUv.y;
+                s.px[4 * q + size_t(k)] = s.quads[q].pixel0.x + (k & 1);
+                s.py[4 * q + size_t(k)] = s.quads[q].pixel0.y + (k >> 1);
             }
         }
         LaneBatch b;
         b.n = int(n);
-        b.uEntry = s.in[0].data(), b.vEntry = s.in[1].data();
-        b.du = s.in[2].data(), b.dv = s.in[3].data();
+        b.px = s.px.data(), b.py = s.py.data(), b.rgb = s.rgb.data();
         b.u = s.u.data(), b.v = s.v.data(), b.depth = s.depth.data();
         b.nCoarse = s.nCoarse.data(), b.nRefine = s.nRefine.data();
         b.fetches = s.fetches.data(), b.texelReads = s.texels.data();
@@ -249,12 +222,8 @@ class FrameProgram {
                 record_.nFetches[r] = s.fetches[i];
                 record_.nTexelReads[r] = s.texels[i];
                 record_.flags[r] = uint8_t(kFlagCovered | s.flags[i]);
-                const bool hit = !(s.flags[i] & kFlagNoHit);
-                glm::vec3 c = Shade(field_, state_, glm::vec2(s.u[i], s.v[i]), s.depth[i],
-                                    slopeScale_, hit);
-                color_[3 * r + 0] = c.x;
-                color_[3 * r + 1] = c.y;
-                color_[3 * r + 2] = c.z;
+                for (int c = 0; c < 3; ++c)
+                    color_[3 * r + size_t(c)] = s.rgb[3 * i + size_t(c)];
             }
             // A lane leaves the loop for good, so a group runs as many trips as its
             // longest-running covered lane.
@@ -335,6 +304,8 @@ RenderOutput Render(const HeightField& field, const RenderSettings& s) {
     const Camera camera = SettingsCamera(s);
     const Mesh mesh = TexturedPlane(s.tiling);
     const float slopeScale = s.depthScale * s.tiling;
+    job.view = &uniforms;
+    job.slopeScale = slopeScale;
 
     auto start = std::chrono::steady_clock::now();
     FrameProgram program(job, lanes.fn, field, s.sampler, uniforms, slopeScale,

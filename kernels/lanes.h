@@ -1,15 +1,15 @@
-// Lane types: what a lane-generic kernel computes with. One kernel source instantiates at 1
-// lane (the reference), 8 lanes (AVX2) and 16 lanes (AVX-512); docs/architecture.md.
+// Lane types: what a lane-generic kernel computes with. One kernel source instantiates at
+// 1 lane (the reference), 8 lanes (AVX2) and 16 lanes (AVX-512); docs/architecture.md.
 //
 // A lane pack L gives F (float per lane) and M (a per-lane mask of F). Kernels keep every
-// per-lane value, counters included, in F: counts stay far below 2^24, where float integers
-// are exact, and one mask type serves every select. Integer lanes (I) appear only inside the
-// samplers' texel addressing.
+// per-lane value, counters included, in F: counts stay far below 2^24, where float
+// integers are exact, and one mask type serves every select. Integer lanes (I) appear
+// only inside the samplers' texel addressing.
 //
 // The pack carries an ISA tag: each translation unit compiled with its own target flags
 // (render/driver_*.cpp) instantiates kernels with its own tag, so instantiations compiled
-// for AVX-512 never merge with those of the baseline build (std::experimental::simd keys its
-// internals on the target flags likewise).
+// for AVX-512 never merge with those of the baseline build (std::experimental::simd keys
+// its internals on the target flags likewise).
 #pragma once
 
 #include <cstdint>
@@ -27,8 +27,11 @@ struct BaselineIsa {};
 template <int N, class Isa = BaselineIsa>
 struct Lanes {
     static constexpr int kWidth = N;
-    using F = stdx::fixed_size_simd<float, N>;
-    using I = stdx::fixed_size_simd<int32_t, N>;
+    // The ABI the target deduces for N lanes (a native vector register where N fits one:
+    // _VecBuiltin with vector masks, or AVX-512 bit masks), not fixed_size, whose masked
+    // operations go through bit-mask conversions and out-of-line helpers.
+    using F = stdx::simd<float, stdx::simd_abi::deduce_t<float, N>>;
+    using I = stdx::simd<int32_t, stdx::simd_abi::deduce_t<int32_t, N>>;
     using M = typename F::mask_type;
     using IM = typename I::mask_type;
 };
@@ -47,8 +50,8 @@ RS_INLINE void Assign(const Mask& m, V& dst, const V& v) {
     stdx::where(m, dst) = v;
 }
 
-/// a < b ? a : b per lane (SSE minps: the second operand when either is NaN), as llvmpipe's
-/// generated code computes min; not stdx::min, whose NaN rule differs.
+/// a < b ? a : b per lane (SSE minps: the second operand when either is NaN), as
+/// llvmpipe's generated code computes min; not stdx::min, whose NaN rule differs.
 template <class V>
 RS_INLINE V MinSse(const V& a, const V& b) {
     return Select(a < b, a, b);

@@ -14,15 +14,20 @@
 #include <string>
 
 #include "kernels/registry.h"
+#include "kernels/view_ray.h"
 #include "texture/lane_sampler.h"
 
 namespace reliefsim {
 
-/// n rays in, n results out (structure of arrays; the caller owns the memory).
+/// n rays in, n results out (structure of arrays; the caller owns the memory). The rays
+/// are given either directly (uEntry, vEntry, du, dv) or as pixels (px, py) of the view
+/// BatchJob::view, turned into rays on the lanes exactly as PixelToRay does.
 struct LaneBatch {
     int n = 0;
-    const float *uEntry = nullptr, *vEntry = nullptr;    ///< MarchInput::uvEntry
-    const float *du = nullptr, *dv = nullptr;            ///< MarchInput::dirUv
+    const float *uEntry = nullptr, *vEntry = nullptr;  ///< MarchInput::uvEntry
+    const float *du = nullptr, *dv = nullptr;          ///< MarchInput::dirUv
+    const int32_t *px = nullptr, *py = nullptr;        ///< or pixels (row 0 at the top)
+    float* rgb = nullptr;  ///< when set, 3 floats per lane: the shaded hit (ShadeHit)
     float *u = nullptr, *v = nullptr, *depth = nullptr;  ///< returned point
     uint16_t *nCoarse = nullptr, *nRefine = nullptr;
     uint32_t *fetches = nullptr, *texelReads = nullptr;
@@ -42,6 +47,8 @@ struct BatchJob {
     const void* params = nullptr;
     uint32_t budget = 0;
     Textures textures;
+    const ViewUniforms* view = nullptr;  ///< for batches given as pixels
+    float slopeScale = 1.0f;             ///< depth scale x tiling, for shading
 };
 
 using BatchFn = void (*)(const BatchJob& job, LaneBatch& batch);

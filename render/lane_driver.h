@@ -8,12 +8,74 @@
 #pragma once
 
 #include <algorithm>
+#include <cmath>
 
 #include "core/record.h"
 #include "kernels/registry.h"
 #include "render/batch.h"
 
 namespace reliefsim::detail {
+
+/// PixelToRay (kernels/view_ray.h) on lanes: the same operations in the same order.
+template <class L>
+RS_INLINE LaneRay<L> PixelToRayLanes(const ViewUniforms& u, const typename L::F& px,
+                                     const typename L::F& py) {
+    using F = typename L::F;
+    const F fx = px + F(0.5f), fy = py + F(0.5f);
+    const F ndcX = (fx * F(2.0f)) / F(u.width) - F(1.0f);
+    const F ndcY = F(1.0f) - (fy * F(2.0f)) / F(u.height);
+    const F dx = (F(u.forward.x) + F(u.right.x) * ndcX) + F(u.up.x) * ndcY;
+    const F dy = (F(u.forward.y) + F(u.right.y) * ndcX) + F(u.up.y) * ndcY;
+    F dz = (F(u.forward.z) + F(u.right.z) * ndcX) + F(u.up.z) * ndcY;
+    dz = Select(dz < F(-1e-6f), dz, F(-1e-6f));
+    const F tPlane = F(-u.eye.z) / dz;
+    const F hitX = F(u.eye.x) + dx * tPlane;
+    const F hitY = F(u.eye.y) + dy * tPlane;
+    const F k(u.depthScale * u.tiling);
+    LaneRay<L> r;
+    r.uEntry = (hitX + F(0.5f)) * F(u.tiling);
+    r.vEntry = (F(0.5f) - hitY) * F(u.tiling);
+    r.du = -(dx / dz) * k;
+    r.dv = (dy / dz) * k;
+    return r;
+}
+
+/// The shading of a hit (not part of the kernel's counts): Lambert with a normal from
+/// central differences of the height sampler (four uncounted fetches), albedo by depth,
+/// magenta where the kernel found no hit (docs/architecture.md "Shading").
+template <class L>
+RS_INLINE void ShadeHit(const Textures& tex, float slopeScale, const typename L::F& u,
+                        const typename L::F& v, const typename L::F& depth,
+                        const typename L::M& hit, const typename L::M& active,
+                        typename L::F (&rgb)[3]) {
+    using F = typename L::F;
+    const HeightField& field = *tex.height;
+    const float du = 1.0f / float(field.width), dv = 1.0f / float(field.height);
+    F unused(0.0f);
+    auto sample = [&](const F& su, const F& sv) {
+        return SampleHeightLanes<L>(tex, su, sv, active, unused);
+    };
+    const F ddu =
+        (sample(u + F(du), v + F(0.0f)) - sample(u - F(du), v - F(0.0f))) / F(2 * du);
+    const F ddv =
+        (sample(u + F(0.0f), v + F(dv)) - sample(u - F(0.0f), v - F(dv))) / F(2 * dv);
+    F nx = ddu * F(slopeScale), ny = ddv * F(slopeScale), nz(1.0f);
+    const F inv = F(1.0f) / stdx::sqrt(nx * nx + ny * ny + nz * nz);
+    nx = nx * inv, ny = ny * inv, nz = nz * inv;
+    float lx = -0.4f, ly = -0.5f, lz = 0.77f;
+    const float linv = 1.0f / std::sqrt(lx * lx + ly * ly + lz * lz);
+    lx = lx * linv, ly = ly * linv, lz = lz * linv;
+    const F dot = nx * F(lx) + ny * F(ly) + nz * F(lz);
+    const F lambert = Select(dot > F(0.0f), dot, F(0.0f));
+    const F d = Select(depth < F(0.0f), F(0.0f), Select(depth > F(1.0f), F(1.0f), depth));
+    const float top[3] = {0.93f, 0.80f, 0.55f}, deep[3] = {0.35f, 0.45f, 0.65f};
+    const float miss[3] = {0.9f, 0.1f, 0.6f};  // no hit: magenta, as peers do
+    const F light = F(0.15f) + F(0.85f) * lambert;
+    for (int c = 0; c < 3; ++c) {
+        const F albedo = Select(hit, F(top[c]) + F(deep[c] - top[c]) * d, F(miss[c]));
+        rgb[c] = albedo * light;
+    }
+}
 
 /// Runs pack [base, base + width) of the batch (lanes past n repeat lane n-1, inactive).
 /// onFetch(active, fetch, sampled) is called once per trip after the fetch.
@@ -23,9 +85,18 @@ RS_INLINE void MarchPack(const typename K::Params& params, const BatchJob& job,
     using F = typename L::F;
     using M = typename L::M;
     constexpr int N = L::kWidth;
-    LaneRay<L> ray;
+    LaneRay<L> ray{F(0.0f), F(0.0f), F(0.0f), F(0.0f)};
     M valid(true);
-    if (base + N <= b.n) {
+    if (b.px) {
+        F px(0.0f), py(0.0f);
+        for (int k = 0; k < N; ++k) {
+            const int i = base + k < b.n ? base + k : b.n - 1;
+            px[k] = float(b.px[i]);
+            py[k] = float(b.py[i]);
+            valid[k] = base + k < b.n;
+        }
+        ray = PixelToRayLanes<L>(*job.view, px, py);
+    } else if (base + N <= b.n) {
         ray.uEntry.copy_from(b.uEntry + base, stdx::element_aligned);
         ray.vEntry.copy_from(b.vEntry + base, stdx::element_aligned);
         ray.du.copy_from(b.du + base, stdx::element_aligned);
@@ -63,6 +134,10 @@ RS_INLINE void MarchPack(const typename K::Params& params, const BatchJob& job,
     }
     LaneOutcome<L> out;
     K::template End<L>(params, ray, state, out);
+    F rgb[3] = {F(0.0f), F(0.0f), F(0.0f)};
+    if (b.rgb)
+        ShadeHit<L>(job.textures, job.slopeScale, out.u, out.v, out.depth, out.hit, valid,
+                    rgb);
     for (int k = 0; k < N; ++k) {
         if (!valid[k]) continue;
         const int i = base + k;
@@ -77,6 +152,8 @@ RS_INLINE void MarchPack(const typename K::Params& params, const BatchJob& job,
         if (!out.hit[k]) f |= kFlagNoHit;
         if (exhausted[k]) f |= kFlagBudgetExhausted;
         b.flags[i] = f;
+        if (b.rgb)
+            for (int c = 0; c < 3; ++c) b.rgb[3 * i + c] = rgb[c][k];
     }
 }
 
@@ -101,7 +178,7 @@ float SampleChain(const Textures& tex, const float* u0, const float* v0, int n, 
     F sum(0.0f);
     double texels = 0.0;
     for (int base = 0; base + L::kWidth <= n; base += L::kWidth) {
-        F u, v, reads(0.0f);
+        F u(0.0f), v(0.0f), reads(0.0f);
         u.copy_from(u0 + base, stdx::element_aligned);
         v.copy_from(v0 + base, stdx::element_aligned);
         const typename L::M all(true);

@@ -1,10 +1,10 @@
-// The counted sampler over lanes: one fetch per active lane, bit-identical to Sampler<true>
-// (texture/sampler.h) lane by lane, at any lane width.
+// The counted sampler over lanes: one fetch per active lane, bit-identical to
+// Sampler<true> (texture/sampler.h) lane by lane, at any lane width.
 //
-// Bilinear filtering with float arithmetic (the default and the hot path) runs on the lanes;
-// nearest, min-of-4 and the 8-bit arithmetics run lane by lane through the scalar sampler.
-// Every texel read of the lane path goes through Texels(), the one choke point that counts
-// them (and, in debug builds, checks the index).
+// Bilinear filtering with float arithmetic (the default and the hot path) runs on the
+// lanes; nearest, min-of-4 and the 8-bit arithmetics run lane by lane through the scalar
+// sampler. Every texel read of the lane path goes through Texels(), the one choke point
+// that counts them (and, in debug builds, checks the index).
 #pragma once
 
 #include "kernels/lanes.h"
@@ -81,7 +81,8 @@ RS_INLINE typename L::F Texels(const float* data, [[maybe_unused]] int64_t count
 /// in-range texels (their coordinates are those of an earlier fetch).
 template <class L>
 RS_INLINE typename L::F SampleHeightLanes(const Textures& tex, const typename L::F& u,
-                                          const typename L::F& v, const typename L::M& active,
+                                          const typename L::F& v,
+                                          const typename L::M& active,
                                           typename L::F& texelReads) {
     using F = typename L::F;
     using I = typename L::I;
