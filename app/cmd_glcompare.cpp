@@ -20,11 +20,6 @@ namespace reliefsim {
 
 namespace {
 
-Camera SceneCamera(const RenderSettings& s) {
-    return MakeOrbitCamera(s.viewAngle, s.azimuth, s.distance, s.fovY,
-                           float(s.width) / float(s.height));
-}
-
 std::string Hex(float f) {
     uint32_t b;
     std::memcpy(&b, &f, sizeof b);
@@ -207,7 +202,7 @@ GlScene MakeGlScene(const RenderSettings& s) {
     g.height = s.height;
     g.uniforms = MakeViewUniforms(s);
     g.clipFromWorld = SceneCamera(s).clipFromWorld;
-    g.mesh = MakePlane(s.tiling);  // same positions and indices as the pipeline's plane
+    g.mesh = MakePlane(s.tiling);  // the scene's plane, as Render() draws it
     g.sampler = s.sampler;
     g.format = s.sampler.precision == Precision::Llvmpipe8 ? TextureFormat::R8
                                                            : TextureFormat::R32F;

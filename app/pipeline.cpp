@@ -87,27 +87,6 @@ double ShortestDouble(float f) {
     return std::strtod(std::string(buf, res.ptr).c_str(), nullptr);
 }
 
-Camera SettingsCamera(const RenderSettings& s) {
-    return MakeOrbitCamera(s.viewAngle, s.azimuth, s.distance, s.fovY,
-                           float(s.width) / float(s.height));
-}
-
-Mesh TexturedPlane(float tiling) {
-    Mesh mesh;
-    const float xs[4] = {-0.5f, 0.5f, 0.5f, -0.5f}, ys[4] = {-0.5f, -0.5f, 0.5f, 0.5f};
-    for (int k = 0; k < 4; ++k) {
-        Vertex v;
-        v.position = glm::vec3(xs[k], ys[k], 0.0f);
-        v.uv = glm::vec2((xs[k] + 0.5f) * tiling, (0.5f - ys[k]) * tiling);
-        v.tangent = glm::vec3(1, 0, 0);
-        v.bitangent = glm::vec3(0, -1, 0);
-        v.normal = glm::vec3(0, 0, 1);
-        mesh.vertices.push_back(v);
-    }
-    mesh.indices = {0, 1, 2, 0, 2, 3};
-    return mesh;
-}
-
 struct TileTotals {
     uint64_t helperLanes = 0, helperFetches = 0, helperTexelReads = 0;
     LaneCosts laneCost;
@@ -253,8 +232,13 @@ class FrameProgram {
 
 }  // namespace
 
+Camera SceneCamera(const RenderSettings& s) {
+    return MakeOrbitCamera(s.viewAngle, s.azimuth, s.distance, s.fovY,
+                           float(s.width) / float(s.height));
+}
+
 ViewUniforms MakeViewUniforms(const RenderSettings& s) {
-    Camera cam = SettingsCamera(s);
+    Camera cam = SceneCamera(s);
     const glm::mat4& v = cam.viewFromWorld;
     const double tanY = std::tan(double(s.fovY) * 0.5 * 3.14159265358979323846 / 180.0);
     const double tanX = tanY * double(s.width) / double(s.height);
@@ -301,8 +285,8 @@ RenderOutput Render(const HeightField& field, const RenderSettings& s) {
     out.color.assign(size_t(s.width) * size_t(s.height) * 3, 0.0f);
     std::vector<TileTotals> tiles(size_t(TileCount(s.width, s.height)));
     const ViewUniforms uniforms = MakeViewUniforms(s);
-    const Camera camera = SettingsCamera(s);
-    const Mesh mesh = TexturedPlane(s.tiling);
+    const Camera camera = SceneCamera(s);
+    const Mesh mesh = MakePlane(s.tiling);
     const float slopeScale = s.depthScale * s.tiling;
     job.view = &uniforms;
     job.slopeScale = slopeScale;

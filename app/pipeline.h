@@ -10,6 +10,7 @@
 #include "kernels/registry.h"
 #include "kernels/view_ray.h"
 #include "metrics/summary.h"
+#include "raster/camera.h"
 #include "texture/height_field.h"
 #include "texture/sampler.h"
 
@@ -83,6 +84,9 @@ struct RenderOutput {
     std::string isa;            ///< its instruction set (timing only)
     LaneCosts laneCost;
 };
+
+/// The settings' orbit camera (the scene's plane is raster/mesh.h MakePlane).
+Camera SceneCamera(const RenderSettings& settings);
 
 /// The view uniforms of the settings' camera (shared by the C++ and GLSL paths).
 ViewUniforms MakeViewUniforms(const RenderSettings& settings);

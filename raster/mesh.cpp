@@ -10,9 +10,9 @@ Mesh MakePlane(float tiling) {
     for (const glm::vec2& c : corners) {
         Vertex v;
         v.position = glm::vec3(c, 0.0f);
-        v.uv = (c + 0.5f) * tiling;
+        v.uv = glm::vec2((c.x + 0.5f) * tiling, (0.5f - c.y) * tiling);
         v.tangent = glm::vec3(1.0f, 0.0f, 0.0f);
-        v.bitangent = glm::vec3(0.0f, 1.0f, 0.0f);
+        v.bitangent = glm::vec3(0.0f, -1.0f, 0.0f);
         v.normal = glm::vec3(0.0f, 0.0f, 1.0f);
         mesh.vertices.push_back(v);
     }

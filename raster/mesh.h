@@ -24,8 +24,11 @@ struct Mesh {
     std::vector<uint32_t> indices;
 };
 
-/// The world square [-0.5,0.5]^2 in the z = 0 plane, two triangles, normal +z, tangent +x
-/// (u), bitangent +y (v), uv = (x + 0.5, y + 0.5) * tiling.
+/// The scene's plane, defined once (render, trace, glcompare and the benchmarks draw it):
+/// the world square [-0.5,0.5]^2 in the z = 0 plane, two triangles, normal +z, tangent +x
+/// (u), bitangent -y (v), uv = (x + 0.5, 0.5 - y) * tiling, so texel row 0 (the image's
+/// top row) lies on the far edge (+y) for azimuth 0 (kernels/view_ray.h PixelToRay
+/// assumes exactly this plane).
 Mesh MakePlane(float tiling);
 
 }  // namespace reliefsim

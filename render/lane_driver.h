@@ -14,6 +14,10 @@
 #include "kernels/registry.h"
 #include "render/batch.h"
 
+#ifndef RS_PACKS_IN_FLIGHT
+#define RS_PACKS_IN_FLIGHT 4
+#endif
+
 namespace reliefsim::detail {
 
 /// PixelToRay (kernels/view_ray.h) on lanes: the same operations in the same order.
@@ -77,85 +81,150 @@ RS_INLINE void ShadeHit(const Textures& tex, float slopeScale, const typename L:
     }
 }
 
-/// Runs pack [base, base + width) of the batch (lanes past n repeat lane n-1, inactive).
-/// onFetch(active, fetch, sampled) is called once per trip after the fetch.
-template <class K, class L, class OnFetch>
-RS_INLINE void MarchPack(const typename K::Params& params, const BatchJob& job,
-                         LaneBatch& b, int base, OnFetch&& onFetch) {
+/// One pack of lanes in flight: its rays, kernel state, next fetch and counts.
+template <class K, class L>
+struct PackRun {
     using F = typename L::F;
     using M = typename L::M;
-    constexpr int N = L::kWidth;
     LaneRay<L> ray{F(0.0f), F(0.0f), F(0.0f), F(0.0f)};
-    M valid(true);
+    typename K::template State<L> state;
+    Fetch<L> fetch;
+    F fetches{0.0f}, texels{0.0f};
+    M valid{true}, exhausted{false}, active{false};
+    int base = 0;
+};
+
+/// Loads pack [base, base + width) of the batch (lanes past n repeat lane n-1, inactive)
+/// and begins the kernel on it.
+template <class K, class L>
+RS_INLINE void BeginPack(const typename K::Params& params, const BatchJob& job,
+                         const LaneBatch& b, int base, PackRun<K, L>& p) {
+    using F = typename L::F;
+    constexpr int N = L::kWidth;
+    p = PackRun<K, L>{};  // a slot is reused for the next pack
+    p.base = base;
     if (b.px) {
         F px(0.0f), py(0.0f);
         for (int k = 0; k < N; ++k) {
             const int i = base + k < b.n ? base + k : b.n - 1;
             px[k] = float(b.px[i]);
             py[k] = float(b.py[i]);
-            valid[k] = base + k < b.n;
+            p.valid[k] = base + k < b.n;
         }
-        ray = PixelToRayLanes<L>(*job.view, px, py);
+        p.ray = PixelToRayLanes<L>(*job.view, px, py);
     } else if (base + N <= b.n) {
-        ray.uEntry.copy_from(b.uEntry + base, stdx::element_aligned);
-        ray.vEntry.copy_from(b.vEntry + base, stdx::element_aligned);
-        ray.du.copy_from(b.du + base, stdx::element_aligned);
-        ray.dv.copy_from(b.dv + base, stdx::element_aligned);
+        p.ray.uEntry.copy_from(b.uEntry + base, stdx::element_aligned);
+        p.ray.vEntry.copy_from(b.vEntry + base, stdx::element_aligned);
+        p.ray.du.copy_from(b.du + base, stdx::element_aligned);
+        p.ray.dv.copy_from(b.dv + base, stdx::element_aligned);
     } else {
         for (int k = 0; k < N; ++k) {
             const int i = base + k < b.n ? base + k : b.n - 1;
-            ray.uEntry[k] = b.uEntry[i];
-            ray.vEntry[k] = b.vEntry[i];
-            ray.du[k] = b.du[i];
-            ray.dv[k] = b.dv[i];
-            valid[k] = base + k < b.n;
+            p.ray.uEntry[k] = b.uEntry[i];
+            p.ray.vEntry[k] = b.vEntry[i];
+            p.ray.du[k] = b.du[i];
+            p.ray.dv[k] = b.dv[i];
+            p.valid[k] = base + k < b.n;
         }
     }
-    typename K::template State<L> state;
-    Fetch<L> fetch;
-    K::template Begin<L>(params, ray, state, fetch);
-    F fetches(0.0f), texels(0.0f);
-    M exhausted(false);
-    M active = valid;
-    const F budget(float(job.budget));
-    // A budget, when set, is at least 1: the first fetch is always allowed.
-    while (Any(active)) {
-        const F sampled =
-            SampleHeightLanes<L>(job.textures, fetch.u, fetch.v, active, texels);
-        Assign(active, fetches, fetches + F(1.0f));
-        onFetch(active, fetch, sampled);
-        M want = K::template Step<L>(params, ray, state, sampled, active, fetch);
-        if (job.budget != 0) {
-            const M refused = want && (fetches >= budget);
-            exhausted = exhausted || refused;
-            want = want && !refused;
-        }
-        active = want;
+    K::template Begin<L>(params, p.ray, p.state, p.fetch);
+    p.active = p.valid;  // a budget, when set, is >= 1: the first fetch is allowed
+}
+
+/// One trip of a pack: a fetch for every active lane, then the kernel's step and the
+/// budget. onFetch(active, fetch, sampled) sees every fetch.
+template <class K, class L, class OnFetch>
+RS_INLINE void TripPack(const typename K::Params& params, const BatchJob& job,
+                        PackRun<K, L>& p, OnFetch&& onFetch) {
+    using F = typename L::F;
+    using M = typename L::M;
+    const F sampled =
+        SampleHeightLanes<L>(job.textures, p.fetch.u, p.fetch.v, p.active, p.texels);
+    Assign(p.active, p.fetches, p.fetches + F(1.0f));
+    onFetch(p.active, p.fetch, sampled);
+    M want = K::template Step<L>(params, p.ray, p.state, sampled, p.active, p.fetch);
+    if (job.budget != 0) {
+        const M refused = want && (p.fetches >= F(float(job.budget)));
+        p.exhausted = p.exhausted || refused;
+        want = want && !refused;
     }
+    p.active = want;
+}
+
+/// Writes a finished pack's results (and its shading, when asked) into the batch.
+template <class K, class L>
+RS_INLINE void EndPack(const typename K::Params& params, const BatchJob& job,
+                       LaneBatch& b, const PackRun<K, L>& p) {
+    using F = typename L::F;
     LaneOutcome<L> out;
-    K::template End<L>(params, ray, state, out);
+    K::template End<L>(params, p.ray, p.state, out);
     F rgb[3] = {F(0.0f), F(0.0f), F(0.0f)};
     if (b.rgb)
-        ShadeHit<L>(job.textures, job.slopeScale, out.u, out.v, out.depth, out.hit, valid,
-                    rgb);
-    for (int k = 0; k < N; ++k) {
-        if (!valid[k]) continue;
-        const int i = base + k;
+        ShadeHit<L>(job.textures, job.slopeScale, out.u, out.v, out.depth, out.hit,
+                    p.valid, rgb);
+    for (int k = 0; k < L::kWidth; ++k) {
+        if (!p.valid[k]) continue;
+        const int i = p.base + k;
         b.u[i] = out.u[k];
         b.v[i] = out.v[k];
         b.depth[i] = out.depth[k];
         b.nCoarse[i] = uint16_t(out.nCoarse[k]);
         b.nRefine[i] = uint16_t(out.nRefine[k]);
-        b.fetches[i] = uint32_t(fetches[k]);
-        b.texelReads[i] = uint32_t(texels[k]);
+        b.fetches[i] = uint32_t(p.fetches[k]);
+        b.texelReads[i] = uint32_t(p.texels[k]);
         uint8_t f = 0;
         if (!out.hit[k]) f |= kFlagNoHit;
-        if (exhausted[k]) f |= kFlagBudgetExhausted;
+        if (p.exhausted[k]) f |= kFlagBudgetExhausted;
         b.flags[i] = f;
         if (b.rgb)
             for (int c = 0; c < 3; ++c) b.rgb[3 * i + c] = rgb[c][k];
     }
 }
+
+/// Runs one pack at `base` until its last lane finishes.
+template <class K, class L, class OnFetch>
+RS_INLINE void MarchPack(const typename K::Params& params, const BatchJob& job,
+                         LaneBatch& b, int base, OnFetch&& onFetch) {
+    PackRun<K, L> p;
+    BeginPack<K, L>(params, job, b, base, p);
+    while (Any(p.active)) TripPack<K, L>(params, job, p, onFetch);
+    EndPack<K, L>(params, job, b, p);
+}
+
+/// Runs every pack of the batch, kPacks in flight: their trips alternate, so the fetch
+/// latency of one pack overlaps the work of the others (each pack's lanes are independent
+/// of the others', so results do not depend on kPacks). A finished slot takes the next
+/// pack.
+template <class K, class L, int kPacks>
+void MarchPacks(const typename K::Params& params, const BatchJob& job, LaneBatch& b) {
+    PackRun<K, L> run[kPacks];
+    bool busy[kPacks] = {};
+    int next = 0, nBusy = 0;
+    auto noTrace = [](const auto&, const auto&, const auto&) {};
+    for (int j = 0; j < kPacks && next < b.n; ++j, next += L::kWidth) {
+        BeginPack<K, L>(params, job, b, next, run[j]);
+        busy[j] = true;
+        ++nBusy;
+    }
+    while (nBusy > 0) {
+        for (int j = 0; j < kPacks; ++j) {
+            if (!busy[j]) continue;
+            TripPack<K, L>(params, job, run[j], noTrace);
+            if (Any(run[j].active)) continue;
+            EndPack<K, L>(params, job, b, run[j]);
+            if (next < b.n) {
+                BeginPack<K, L>(params, job, b, next, run[j]);
+                next += L::kWidth;
+            } else {
+                busy[j] = false;
+                --nBusy;
+            }
+        }
+    }
+}
+
+/// Packs a lane width keeps in flight (measured: bench/kernels_bench BM_Kernel).
+inline constexpr int kPacksInFlight = RS_PACKS_IN_FLIGHT;
 
 /// The batch entry point of one lane width: every pack of the batch, for the job's
 /// kernel.
@@ -164,9 +233,7 @@ void RunBatch(const BatchJob& job, LaneBatch& b) {
     VisitKernelType(job.kernelIndex, [&](auto type) {
         using K = typename decltype(type)::type;
         const auto& params = *static_cast<const typename K::Params*>(job.params);
-        for (int base = 0; base < b.n; base += L::kWidth)
-            MarchPack<K, L>(params, job, b, base,
-                            [](const auto&, const auto&, const auto&) {});
+        MarchPacks<K, L, kPacksInFlight>(params, job, b);
     });
 }
 

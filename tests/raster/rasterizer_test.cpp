@@ -295,7 +295,7 @@ TEST(Rasterizer, PerspectiveCorrectUvMatchesRayPlaneIntersection) {
             const glm::dvec3 pa = glm::dvec3(a) / a.w, pb = glm::dvec3(b) / b.w;
             const double t = pa.z / (pa.z - pb.z);
             const glm::dvec3 hit = pa + t * (pb - pa);
-            const glm::dvec2 uvRef(hit.x + 0.5, hit.y + 0.5);
+            const glm::dvec2 uvRef(hit.x + 0.5, 0.5 - hit.y);
             maxUvError = std::max(maxUvError, glm::length(glm::dvec2(p.uv[i]) - uvRef));
             maxPosError =
                 std::max(maxPosError, glm::length(glm::dvec3(p.worldPos[i]) - hit));

@@ -1,0 +1,153 @@
+// The fragment driver at every lane width: identical frames, and the executed lane cost
+// against an oracle built from the rasterizer's own triangle ids.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstring>
+#include <map>
+
+#include "app/pipeline.h"
+#include "raster/mesh.h"
+#include "raster/rasterizer.h"
+#include "raster/viewport_pieces.h"
+#include "render/batch.h"
+#include "texture/procedural.h"
+
+using namespace reliefsim;
+
+namespace {
+
+template <class T>
+bool SameBytes(const std::vector<T>& a, const std::vector<T>& b) {
+    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+}
+
+void ExpectSameFrame(const RenderOutput& a, const RenderOutput& b, const std::string& what) {
+    const FrameRecord &x = a.record, &y = b.record;
+    EXPECT_TRUE(SameBytes(x.hitU, y.hitU)) << what;
+    EXPECT_TRUE(SameBytes(x.hitV, y.hitV)) << what;
+    EXPECT_TRUE(SameBytes(x.hitDepth, y.hitDepth)) << what;
+    EXPECT_TRUE(SameBytes(x.nCoarse, y.nCoarse)) << what;
+    EXPECT_TRUE(SameBytes(x.nRefine, y.nRefine)) << what;
+    EXPECT_TRUE(SameBytes(x.nFetches, y.nFetches)) << what;
+    EXPECT_TRUE(SameBytes(x.nTexelReads, y.nTexelReads)) << what;
+    EXPECT_TRUE(SameBytes(x.flags, y.flags)) << what;
+    EXPECT_TRUE(SameBytes(a.color, b.color)) << what;
+    EXPECT_EQ(x.nHelperFetches, y.nHelperFetches) << what;
+    EXPECT_EQ(a.laneCost.group4x2, b.laneCost.group4x2) << what;
+    EXPECT_EQ(a.laneCost.warp32, b.laneCost.warp32) << what;
+}
+
+// Sum over (bw x bh block, triangle) with a covered pixel of bw*bh x the largest fetch
+// count among its covered pixels: what a SIMD group of those lanes executes.
+// Which triangle of the scene's plane covers each pixel, straight from the rasterizer.
+struct TriangleIds {
+    static constexpr bool kReadsAttributes = false;
+    int width;
+    std::vector<int> id;
+    void ShadeQuad(const QuadFragment& q, int) {
+        for (int k = 0; k < 4; ++k)
+            if ((q.coveredMask >> k) & 1u)
+                id[size_t((q.pixel0.y + (k >> 1)) * width + q.pixel0.x + (k & 1))] =
+                    int(q.triangle);
+    }
+};
+
+uint64_t OracleCost(const FrameRecord& r, const std::vector<int>& tri, int bw, int bh) {
+    std::map<std::pair<int, int>, uint32_t> worst;  // (block, triangle) -> trips
+    for (int y = 0; y < r.height; ++y)
+        for (int x = 0; x < r.width; ++x) {
+            const size_t i = r.Index(x, y);
+            if (!r.Covered(i)) continue;
+            const int block = (y / bh) * ((r.width + bw - 1) / bw) + x / bw;
+            uint32_t& m = worst[{block, tri[i]}];
+            m = std::max(m, r.nFetches[i]);
+        }
+    uint64_t total = 0;
+    for (const auto& [key, trips] : worst) total += uint64_t(trips) * uint64_t(bw * bh);
+    return total;
+}
+
+}  // namespace
+
+TEST(LaneWidth, EveryWidthRendersTheSameFrame) {
+    const HeightField noise = MakeBuiltinMap("noise", 64, 64);
+    const HeightField steps = MakeBuiltinMap("steps", 48, 48);  // not a power of two
+    struct Variant {
+        const HeightField* map;
+        Filter filter;
+        WrapMode wrap;
+        std::vector<std::string> set;
+    };
+    const std::vector<Variant> variants = {
+        {&noise, Filter::Bilinear, WrapMode::Repeat, {}},
+        {&steps, Filter::Bilinear, WrapMode::Repeat, {"early_exit=0"}},
+        {&steps, Filter::Bilinear, WrapMode::Clamp, {"budget=9"}},
+        {&noise, Filter::Nearest, WrapMode::Repeat, {}},
+        {&noise, Filter::Min4, WrapMode::Clamp, {}},
+    };
+    for (const KernelInfo* m : Methods()) {
+        for (const Variant& v : variants) {
+            RenderSettings s;
+            s.method = std::string(m->name);
+            s.set = v.set;
+            s.width = 77;  // odd sizes: partial packs and quads half outside the image
+            s.height = 53;
+            s.viewAngle = 63.0f;
+            s.azimuth = 20.0f;
+            s.tiling = 2.0f;
+            s.sampler.filter = v.filter;
+            s.sampler.wrap = v.wrap;
+            s.threads = 1;
+            s.lanes = 1;
+            const RenderOutput reference = Render(*v.map, s);
+            for (const LaneWidthInfo& w : LaneWidths()) {
+                if (!w.supported) continue;
+                for (int threads : {1, 2}) {
+                    s.lanes = w.width;
+                    s.threads = threads;
+                    ExpectSameFrame(reference, Render(*v.map, s),
+                                    s.method + " lanes " + std::to_string(w.width) +
+                                        " threads " + std::to_string(threads));
+                }
+            }
+        }
+    }
+}
+
+TEST(LaneWidth, ExecutedLaneCostMatchesTheGroupOracle) {
+    const HeightField field = MakeBuiltinMap("shapes", 128, 128);
+    for (float angle : {0.0f, 40.0f, 70.0f}) {
+        RenderSettings s;
+        s.width = 150;
+        s.height = 98;
+        s.viewAngle = angle;
+        s.azimuth = 33.0f;
+        s.distance = 2.5f;  // the whole plane in view: no clipping, so its two triangles are
+                            // the groups' triangles (the clipper's pieces would be)
+        const RenderOutput out = Render(field, s);
+        const Camera camera = SceneCamera(s);
+        ASSERT_EQ(ClipMeshToViewport(MakePlane(s.tiling), camera.clipFromWorld).indices.size(),
+                  6u);
+        TriangleIds ids{s.width, std::vector<int>(size_t(s.width * s.height), -1)};
+        RasterizeFrame(MakePlane(s.tiling), camera, s.width, s.height, ids);
+        const std::vector<int>& piece = ids.id;
+        EXPECT_EQ(out.laneCost.quad, OracleCost(out.record, piece, 2, 2)) << angle;
+        EXPECT_EQ(out.laneCost.group4x2, OracleCost(out.record, piece, 4, 2)) << angle;
+        EXPECT_EQ(out.laneCost.warp32, OracleCost(out.record, piece, 8, 4)) << angle;
+        EXPECT_EQ(out.laneCost.wave64, OracleCost(out.record, piece, 8, 8)) << angle;
+        // Split by triangle, groups cost at least the block model of the summary.
+        EXPECT_GE(out.laneCost.group4x2, out.summary.laneFetches4x2) << angle;
+        EXPECT_GT(out.laneCost.quad, 0u);
+    }
+}
+
+TEST(LaneWidth, UnknownOrUnsupportedWidthIsRefused) {
+    EXPECT_THROW(PickLaneWidth(3), Error);
+    for (const LaneWidthInfo& w : LaneWidths()) {
+        if (!w.supported) {
+            EXPECT_THROW(PickLaneWidth(w.width), Error);
+        }
+    }
+    EXPECT_TRUE(PickLaneWidth(0).supported);
+}
