@@ -19,10 +19,12 @@ namespace {
 
 template <class T>
 bool SameBytes(const std::vector<T>& a, const std::vector<T>& b) {
-    return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+    return a.size() == b.size() &&
+           std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
 }
 
-void ExpectSameFrame(const RenderOutput& a, const RenderOutput& b, const std::string& what) {
+void ExpectSameFrame(const RenderOutput& a, const RenderOutput& b,
+                     const std::string& what) {
     const FrameRecord &x = a.record, &y = b.record;
     EXPECT_TRUE(SameBytes(x.hitU, y.hitU)) << what;
     EXPECT_TRUE(SameBytes(x.hitV, y.hitV)) << what;
@@ -123,12 +125,13 @@ TEST(LaneWidth, ExecutedLaneCostMatchesTheGroupOracle) {
         s.height = 98;
         s.viewAngle = angle;
         s.azimuth = 33.0f;
-        s.distance = 2.5f;  // the whole plane in view: no clipping, so its two triangles are
-                            // the groups' triangles (the clipper's pieces would be)
+        s.distance = 2.5f;  // the whole plane in view: no clipping, so its two triangles
+                            // are the groups' triangles (the clipper's pieces would be)
         const RenderOutput out = Render(field, s);
         const Camera camera = SceneCamera(s);
-        ASSERT_EQ(ClipMeshToViewport(MakePlane(s.tiling), camera.clipFromWorld).indices.size(),
-                  6u);
+        ASSERT_EQ(
+            ClipMeshToViewport(MakePlane(s.tiling), camera.clipFromWorld).indices.size(),
+            6u);
         TriangleIds ids{s.width, std::vector<int>(size_t(s.width * s.height), -1)};
         RasterizeFrame(MakePlane(s.tiling), camera, s.width, s.height, ids);
         const std::vector<int>& piece = ids.id;
