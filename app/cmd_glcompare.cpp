@@ -206,8 +206,7 @@ GlScene MakeGlScene(const RenderSettings& s) {
     g.sampler = s.sampler;
     g.format = s.sampler.precision == Precision::Llvmpipe8 ? TextureFormat::R8
                                                            : TextureFormat::R32F;
-    const KernelInfo& method = FindMethod(s.method);
-    g.kernel = MakeKernel(method, ResolveParams(method, s.set));
+    g.kernel = SettingsKernel(s);
     return g;
 }
 

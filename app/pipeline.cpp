@@ -100,19 +100,9 @@ class FrameProgram {
   public:
     static constexpr bool kReadsAttributes = false;  // rays come from PixelToRay
 
-    FrameProgram(const BatchJob& job, BatchFn run, const HeightField& field,
-                 const SamplerState& state, const ViewUniforms& uniforms,
-                 float slopeScale, FrameRecord& record, std::vector<float>& color,
-                 std::vector<TileTotals>& tiles)
-        : job_(job),
-          run_(run),
-          field_(field),
-          state_(state),
-          uniforms_(uniforms),
-          slopeScale_(slopeScale),
-          record_(record),
-          color_(color),
-          tiles_(tiles) {}
+    FrameProgram(const BatchJob& job, BatchFn run, FrameRecord& record,
+                 std::vector<float>& color, std::vector<TileTotals>& tiles)
+        : job_(job), run_(run), record_(record), color_(color), tiles_(tiles) {}
 
     void ShadeQuad(const QuadFragment& q, int tileIndex) {
         Scratch& s = scratch_.local();
@@ -220,10 +210,6 @@ class FrameProgram {
 
     const BatchJob& job_;
     BatchFn run_;
-    const HeightField& field_;
-    SamplerState state_;
-    ViewUniforms uniforms_;
-    float slopeScale_;
     FrameRecord& record_;
     std::vector<float>& color_;
     std::vector<TileTotals>& tiles_;
@@ -231,6 +217,11 @@ class FrameProgram {
 };
 
 }  // namespace
+
+Kernel SettingsKernel(const RenderSettings& s) {
+    const KernelInfo& method = FindMethod(s.method);
+    return MakeKernel(method, ResolveParams(method, s.set));
+}
 
 Camera SceneCamera(const RenderSettings& s) {
     return MakeOrbitCamera(s.viewAngle, s.azimuth, s.distance, s.fovY,
@@ -260,17 +251,11 @@ RenderOutput Render(const HeightField& field, const RenderSettings& s) {
     ValidateSettings(s);
     ValidateHeightField(field);
     RenderOutput out;
-    const KernelInfo& method = FindMethod(s.method);
-    out.params = ResolveParams(method, s.set);
-    const Kernel kernel = MakeKernel(method, out.params);
+    const Kernel kernel = SettingsKernel(s);
+    out.params = kernel.values;
     const LaneWidthInfo& lanes = PickLaneWidth(s.lanes);
-    const std::shared_ptr<const void> params =
-        MakeKernelParams(kernel.index, kernel.values);
-    BatchJob job;
-    job.kernelIndex = kernel.index;
-    job.params = params.get();
-    job.budget = kernel.Budget();
-    job.textures = {&field, s.sampler};
+    std::shared_ptr<const void> params;
+    BatchJob job = MakeBatchJob(kernel, {&field, s.sampler}, params);
 
     std::unique_ptr<tbb::global_control> limit;
     if (s.threads > 0)
@@ -287,13 +272,11 @@ RenderOutput Render(const HeightField& field, const RenderSettings& s) {
     const ViewUniforms uniforms = MakeViewUniforms(s);
     const Camera camera = SceneCamera(s);
     const Mesh mesh = MakePlane(s.tiling);
-    const float slopeScale = s.depthScale * s.tiling;
     job.view = &uniforms;
-    job.slopeScale = slopeScale;
+    job.slopeScale = s.depthScale * s.tiling;
 
     auto start = std::chrono::steady_clock::now();
-    FrameProgram program(job, lanes.fn, field, s.sampler, uniforms, slopeScale,
-                         out.record, out.color, tiles);
+    FrameProgram program(job, lanes.fn, out.record, out.color, tiles);
     const RasterStats stats = RasterizeFrame(mesh, camera, s.width, s.height, program);
     out.frameSeconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -85,6 +85,10 @@ struct RenderOutput {
     LaneCosts laneCost;
 };
 
+/// The settings' method with its --set parameters resolved (defaults filled in): the one
+/// place render, trace and glcompare configure their kernel.
+Kernel SettingsKernel(const RenderSettings& settings);
+
 /// The settings' orbit camera (the scene's plane is raster/mesh.h MakePlane).
 Camera SceneCamera(const RenderSettings& settings);
 

@@ -16,8 +16,7 @@ PixelTrace TracePixel(const HeightField& field, const RenderSettings& s, int x, 
         throw Error("--pixel " + std::to_string(x) + "," + std::to_string(y) +
                     ": outside the " + std::to_string(s.width) + "x" +
                     std::to_string(s.height) + " image");
-    const KernelInfo& method = FindMethod(s.method);
-    const Kernel kernel = MakeKernel(method, ResolveParams(method, s.set));
+    const Kernel kernel = SettingsKernel(s);
     std::shared_ptr<const void> params;
     const BatchJob job = MakeBatchJob(kernel, {&field, s.sampler}, params);
     PixelTrace trace;

@@ -106,9 +106,15 @@ struct LinearSearchPreset<Refinement::Pom> {
                                                          kBudgetParam};
 };
 
-inline double ValueOr(const ParamValues& v, std::string_view key, double fallback) {
-    auto it = v.find(std::string(key));
-    return it == v.end() ? fallback : it->second;
+/// The value of parameter `name`, else its default among `specs` (so defaults live only
+/// in the ParamSpecs), else 0: a parameter the preset does not have and does not read.
+template <size_t N>
+double ParamValue(const ParamValues& v, const std::array<ParamSpec, N>& specs,
+                  std::string_view name) {
+    if (auto it = v.find(name); it != v.end()) return it->second;
+    for (const ParamSpec& p : specs)
+        if (p.name == name) return p.defaultValue;
+    return 0.0;
 }
 
 }  // namespace detail
@@ -134,10 +140,13 @@ struct LinearSearch {
     };
     static Params FromValues(const ParamValues& v) {
         Params p;
-        p.linearSteps = int(detail::ValueOr(v, "linear_steps", 32));
-        p.refineSteps = int(detail::ValueOr(v, "refine_steps", 0));
-        p.earlyExit = detail::ValueOr(v, "early_exit", 1) != 0.0;
-        p.secantTolerance = float(detail::ValueOr(v, "secant_tolerance", 0.01));
+        auto get = [&](std::string_view name) {
+            return detail::ParamValue(v, Preset::kParams, name);
+        };
+        p.linearSteps = int(get("linear_steps"));
+        p.refineSteps = int(get("refine_steps"));
+        p.earlyExit = get("early_exit") != 0.0;
+        p.secantTolerance = float(get("secant_tolerance"));
         return p;
     }
 

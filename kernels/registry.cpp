@@ -83,7 +83,7 @@ Kernel MakeKernel(const KernelInfo& method, const ParamValues& values) {
         throw Error("--method \"" + std::string(method.name) +
                     "\": not in the catalogue");
     for (const ParamSpec& p : method.params) {
-        auto it = values.find(std::string(p.name));
+        auto it = values.find(p.name);
         k.values[std::string(p.name)] = it == values.end() ? p.defaultValue : it->second;
     }
     return k;

@@ -6,21 +6,16 @@
 #include "core/error.h"
 #include "render/lane_driver.h"
 
-namespace reliefsim {
-
-#define RS_DECLARE_WIDTH(suffix)                                                        \
-    void RunBatch##suffix(const BatchJob& job, LaneBatch& batch);                       \
-    float SampleChain##suffix(const Textures& textures, const float* u, const float* v, \
-                              int n, int chain, uint64_t* texelReads);
-RS_DECLARE_WIDTH(W1)
-RS_DECLARE_WIDTH(W4)
+RS_DECLARE_LANE_WIDTH(W1)
+RS_DECLARE_LANE_WIDTH(W4)
 #if RS_HAVE_AVX2_UNIT
-RS_DECLARE_WIDTH(W8Avx2)
+RS_DECLARE_LANE_WIDTH(W8Avx2)
 #endif
 #if RS_HAVE_AVX512_UNIT
-RS_DECLARE_WIDTH(W16Avx512)
+RS_DECLARE_LANE_WIDTH(W16Avx512)
 #endif
-#undef RS_DECLARE_WIDTH
+
+namespace reliefsim {
 
 namespace {
 
@@ -89,22 +84,12 @@ std::shared_ptr<const void> MakeKernelParams(int kernelIndex, const ParamValues&
     });
 }
 
-void MarchTraced(const BatchJob& job, LaneBatch& b, const TraceSink& trace) {
-    using L = Lanes<1, TraceIsa>;
-    VisitKernelType(job.kernelIndex, [&](auto type) {
-        using K = typename decltype(type)::type;
-        const auto& params = *static_cast<const typename K::Params*>(job.params);
-        for (int base = 0; base < b.n; ++base)
-            detail::MarchPack<K, L>(
-                params, job, b, base,
-                [&](const L::M& active, const Fetch<L>& f, const L::F& sampled) {
-                    if (trace && active[0]) trace({f.u[0], f.v[0], f.t[0], sampled[0]});
-                });
-    });
-}
+namespace {
 
-RayRun MarchRay(const BatchJob& job, const MarchInput& in, const TraceSink& trace) {
-    RayRun run;
+// One ray as a batch of one lane, run by `run(batch)`.
+template <class Run>
+RayRun RunOneRay(const MarchInput& in, Run&& run) {
+    RayRun out;
     float u = 0, v = 0, depth = 0;
     uint8_t flags = 0;
     LaneBatch b;
@@ -112,15 +97,36 @@ RayRun MarchRay(const BatchJob& job, const MarchInput& in, const TraceSink& trac
     b.uEntry = &in.uvEntry.x, b.vEntry = &in.uvEntry.y;
     b.du = &in.dirUv.x, b.dv = &in.dirUv.y;
     b.u = &u, b.v = &v, b.depth = &depth;
-    b.nCoarse = &run.result.nCoarse, b.nRefine = &run.result.nRefine;
-    b.fetches = &run.counts.nFetches, b.texelReads = &run.counts.nTexelReads;
+    b.nCoarse = &out.result.nCoarse, b.nRefine = &out.result.nRefine;
+    b.fetches = &out.counts.nFetches, b.texelReads = &out.counts.nTexelReads;
     b.flags = &flags;
-    MarchTraced(job, b, trace);
-    run.result.uvHit = glm::vec2(u, v);
-    run.result.depthHit = depth;
-    run.result.hit = !(flags & kFlagNoHit);
-    run.result.budgetExhausted = (flags & kFlagBudgetExhausted) != 0;
-    return run;
+    run(b);
+    out.result.uvHit = glm::vec2(u, v);
+    out.result.depthHit = depth;
+    out.result.hit = !(flags & kFlagNoHit);
+    out.result.budgetExhausted = (flags & kFlagBudgetExhausted) != 0;
+    return out;
+}
+
+}  // namespace
+
+RayRun MarchRay(const BatchJob& job, const MarchInput& in, const TraceSink& trace) {
+    using L = Lanes<1, TraceIsa>;
+    return RunOneRay(in, [&](LaneBatch& b) {
+        VisitKernelType(job.kernelIndex, [&](auto type) {
+            using K = typename decltype(type)::type;
+            const auto& params = *static_cast<const typename K::Params*>(job.params);
+            detail::MarchPacks<K, L, 1>(
+                params, job, b,
+                [&](const L::M& active, const Fetch<L>& f, const L::F& sampled) {
+                    if (trace && active[0]) trace({f.u[0], f.v[0], f.t[0], sampled[0]});
+                });
+        });
+    });
+}
+
+RayRun MarchRayAt(const LaneWidthInfo& width, const BatchJob& job, const MarchInput& in) {
+    return RunOneRay(in, [&](LaneBatch& b) { width.fn(job, b); });
 }
 
 BatchJob MakeBatchJob(const Kernel& kernel, const Textures& textures,

@@ -84,12 +84,11 @@ struct RayRun {
 };
 RayRun MarchRay(const BatchJob& job, const MarchInput& in, const TraceSink& trace = {});
 
+/// One ray through a given lane width's batch function (as lane 0 of a pack).
+RayRun MarchRayAt(const LaneWidthInfo& width, const BatchJob& job, const MarchInput& in);
+
 /// A BatchJob for a configured kernel; `params` keeps its Params alive.
 BatchJob MakeBatchJob(const Kernel& kernel, const Textures& textures,
                       std::shared_ptr<const void>& params);
-
-/// One ray, one lane, every fetch reported to `trace` (when set): the reference the trace
-/// commands use.
-void MarchTraced(const BatchJob& job, LaneBatch& batch, const TraceSink& trace);
 
 }  // namespace reliefsim

@@ -181,26 +181,17 @@ RS_INLINE void EndPack(const typename K::Params& params, const BatchJob& job,
     }
 }
 
-/// Runs one pack at `base` until its last lane finishes.
-template <class K, class L, class OnFetch>
-RS_INLINE void MarchPack(const typename K::Params& params, const BatchJob& job,
-                         LaneBatch& b, int base, OnFetch&& onFetch) {
-    PackRun<K, L> p;
-    BeginPack<K, L>(params, job, b, base, p);
-    while (Any(p.active)) TripPack<K, L>(params, job, p, onFetch);
-    EndPack<K, L>(params, job, b, p);
-}
-
 /// Runs every pack of the batch, kPacks in flight: their trips alternate, so the fetch
 /// latency of one pack overlaps the work of the others (each pack's lanes are independent
 /// of the others', so results do not depend on kPacks). A finished slot takes the next
 /// pack.
-template <class K, class L, int kPacks>
-void MarchPacks(const typename K::Params& params, const BatchJob& job, LaneBatch& b) {
+/// onFetch(active, fetch, sampled) sees every fetch of every pack.
+template <class K, class L, int kPacks, class OnFetch>
+void MarchPacks(const typename K::Params& params, const BatchJob& job, LaneBatch& b,
+                OnFetch&& onFetch) {
     PackRun<K, L> run[kPacks];
     bool busy[kPacks] = {};
     int next = 0, nBusy = 0;
-    auto noTrace = [](const auto&, const auto&, const auto&) {};
     for (int j = 0; j < kPacks && next < b.n; ++j, next += L::kWidth) {
         BeginPack<K, L>(params, job, b, next, run[j]);
         busy[j] = true;
@@ -209,7 +200,7 @@ void MarchPacks(const typename K::Params& params, const BatchJob& job, LaneBatch
     while (nBusy > 0) {
         for (int j = 0; j < kPacks; ++j) {
             if (!busy[j]) continue;
-            TripPack<K, L>(params, job, run[j], noTrace);
+            TripPack<K, L>(params, job, run[j], onFetch);
             if (Any(run[j].active)) continue;
             EndPack<K, L>(params, job, b, run[j]);
             if (next < b.n) {
@@ -233,7 +224,8 @@ void RunBatch(const BatchJob& job, LaneBatch& b) {
     VisitKernelType(job.kernelIndex, [&](auto type) {
         using K = typename decltype(type)::type;
         const auto& params = *static_cast<const typename K::Params*>(job.params);
-        MarchPacks<K, L, kPacksInFlight>(params, job, b);
+        MarchPacks<K, L, kPacksInFlight>(params, job, b,
+                                         [](const auto&, const auto&, const auto&) {});
     });
 }
 
@@ -262,3 +254,27 @@ float SampleChain(const Textures& tex, const float* u0, const float* v0, int n, 
 }
 
 }  // namespace reliefsim::detail
+
+/// The entry points of one lane-width unit (render/batch_w*.cpp), declared by batch.cpp
+/// and defined by the unit, with its own ISA tag type so its instantiations are its own.
+#define RS_DECLARE_LANE_WIDTH(suffix)                                                   \
+    namespace reliefsim {                                                               \
+    void RunBatch##suffix(const BatchJob& job, LaneBatch& batch);                       \
+    float SampleChain##suffix(const Textures& textures, const float* u, const float* v, \
+                              int n, int chain, uint64_t* texelReads);                  \
+    }
+#define RS_DEFINE_LANE_WIDTH(suffix, width)                                             \
+    RS_DECLARE_LANE_WIDTH(suffix)                                                       \
+    namespace reliefsim {                                                               \
+    namespace {                                                                         \
+    struct Isa##suffix {};                                                              \
+    }                                                                                   \
+    void RunBatch##suffix(const BatchJob& job, LaneBatch& batch) {                      \
+        detail::RunBatch<Lanes<width, Isa##suffix>>(job, batch);                        \
+    }                                                                                   \
+    float SampleChain##suffix(const Textures& textures, const float* u, const float* v, \
+                              int n, int chain, uint64_t* texelReads) {                 \
+        return detail::SampleChain<Lanes<width, Isa##suffix>>(textures, u, v, n, chain, \
+                                                              texelReads);              \
+    }                                                                                   \
+    }

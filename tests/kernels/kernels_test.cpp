@@ -74,24 +74,15 @@ MarchRun March(const TestKernel& k, const HeightField& f, MarchInput in,
     const RayRun one = MarchRay(job, in);
     for (const LaneWidthInfo& w : LaneWidths()) {
         if (!w.supported) continue;
-        float u, v, depth;
-        uint16_t nc, nr;
-        uint32_t fetches, texels;
-        uint8_t flags;
-        LaneBatch b;
-        b.n = 1;
-        b.uEntry = &in.uvEntry.x, b.vEntry = &in.uvEntry.y;
-        b.du = &in.dirUv.x, b.dv = &in.dirUv.y;
-        b.u = &u, b.v = &v, b.depth = &depth, b.nCoarse = &nc, b.nRefine = &nr;
-        b.fetches = &fetches, b.texelReads = &texels, b.flags = &flags;
-        w.fn(job, b);
-        EXPECT_EQ(std::bit_cast<uint32_t>(u), std::bit_cast<uint32_t>(one.result.uvHit.x))
+        const RayRun r = MarchRayAt(w, job, in);
+        EXPECT_EQ(std::bit_cast<uint32_t>(r.result.uvHit.x),
+                  std::bit_cast<uint32_t>(one.result.uvHit.x))
             << w.width;
-        EXPECT_EQ(std::bit_cast<uint32_t>(depth),
+        EXPECT_EQ(std::bit_cast<uint32_t>(r.result.depthHit),
                   std::bit_cast<uint32_t>(one.result.depthHit))
             << w.width;
-        EXPECT_EQ(fetches, one.counts.nFetches) << w.width;
-        EXPECT_EQ(nr, one.result.nRefine) << w.width;
+        EXPECT_EQ(r.counts.nFetches, one.counts.nFetches) << w.width;
+        EXPECT_EQ(r.result.nRefine, one.result.nRefine) << w.width;
     }
     return {one.result, one.counts};
 }
