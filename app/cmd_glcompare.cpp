@@ -241,7 +241,8 @@ GlCompareResult RunGlCompare(const HeightField& field, const RenderSettings& s,
         std::vector<uint32_t> fetches(triangles.size(), 0);
         const ViewUniforms uniforms = MakeViewUniforms(s);
         std::shared_ptr<const void> params;
-        const BatchJob job = MakeBatchJob(scene.kernel, {&field, s.sampler}, params);
+        const BatchJob job =
+            MakeBatchJob(scene.kernel, BindTextures(field, s.sampler), params);
         detail::DenormalsAreZeroScope fp;  // as in the frame loop
         for (int y = 0; y < s.height; ++y)
             for (int x = 0; x < s.width; ++x) {

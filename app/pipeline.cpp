@@ -255,7 +255,7 @@ RenderOutput Render(const HeightField& field, const RenderSettings& s) {
     out.params = kernel.values;
     const LaneWidthInfo& lanes = PickLaneWidth(s.lanes);
     std::shared_ptr<const void> params;
-    BatchJob job = MakeBatchJob(kernel, {&field, s.sampler}, params);
+    BatchJob job = MakeBatchJob(kernel, BindTextures(field, s.sampler), params);
 
     std::unique_ptr<tbb::global_control> limit;
     if (s.threads > 0)

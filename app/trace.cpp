@@ -18,7 +18,7 @@ PixelTrace TracePixel(const HeightField& field, const RenderSettings& s, int x, 
                     std::to_string(s.height) + " image");
     const Kernel kernel = SettingsKernel(s);
     std::shared_ptr<const void> params;
-    const BatchJob job = MakeBatchJob(kernel, {&field, s.sampler}, params);
+    const BatchJob job = MakeBatchJob(kernel, BindTextures(field, s.sampler), params);
     PixelTrace trace;
     trace.x = x;
     trace.y = y;

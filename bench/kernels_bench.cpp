@@ -55,8 +55,8 @@ void BM_Kernel(benchmark::State& state, const KernelInfo* info, LaneWidthInfo wi
         return;
     }
     std::shared_ptr<const void> params;
-    const BatchJob job =
-        MakeBatchJob(MakeKernel(*info, ResolveParams(*info, {})), {&Field(), {}}, params);
+    const BatchJob job = MakeBatchJob(MakeKernel(*info, ResolveParams(*info, {})),
+                                      BindTextures(Field(), {}), params);
     Rays rays;
     LaneBatch b = rays.Batch();
     uint64_t fetches = 0;
@@ -79,7 +79,7 @@ void BM_SampleChain(benchmark::State& state, LaneWidthInfo width) {
     std::vector<float> u(kLanes), v(kLanes);
     for (int i = 0; i < kLanes; ++i)
         u[size_t(i)] = float(i) / kLanes, v[size_t(i)] = 0.3f;
-    const Textures tex{&Field(), {}};
+    const Textures tex = BindTextures(Field(), {});
     uint64_t texels = 0;
     for (auto _ : state)
         benchmark::DoNotOptimize(

@@ -14,8 +14,13 @@
 
 #include <cstdint>
 #include <experimental/simd>
+#include <type_traits>
 
 #include "core/error.h"
+
+#if defined(__FMA__) || defined(__AVX512F__)
+#include <immintrin.h>
+#endif
 
 namespace reliefsim {
 
@@ -68,6 +73,29 @@ RS_INLINE typename L::I TruncToIntLanes(typename L::F f) {
     const auto inRange = (f >= F(-2147483648.0f)) && (f < F(2147483648.0f));
     stdx::where(!inRange, f) = F(-2147483648.0f);
     return stdx::static_simd_cast<typename L::I>(f);
+}
+
+/// fmaf(a, b, c) per lane, one rounding. The FMA instruction where the unit's ISA has
+/// it (GCC 12's stdx::fma does the lanes one by one under -ffp-contract=off), otherwise
+/// stdx::fma (libm's fmaf per lane: exact, slow).
+template <class V>
+RS_INLINE V Fma(const V& a, const V& b, const V& c) {
+    if constexpr (std::is_same_v<typename V::value_type, float>) {
+#if defined(__AVX512F__)
+        if constexpr (sizeof(V) == 64)
+            return V(_mm512_fmadd_ps(static_cast<__m512>(a), static_cast<__m512>(b),
+                                     static_cast<__m512>(c)));
+#endif
+#if defined(__FMA__)
+        if constexpr (sizeof(V) == 32)
+            return V(_mm256_fmadd_ps(static_cast<__m256>(a), static_cast<__m256>(b),
+                                     static_cast<__m256>(c)));
+        if constexpr (sizeof(V) == 16)
+            return V(_mm_fmadd_ps(static_cast<__m128>(a), static_cast<__m128>(b),
+                                  static_cast<__m128>(c)));
+#endif
+    }
+    return stdx::fma(a, b, c);
 }
 
 template <class Mask>

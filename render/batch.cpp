@@ -33,14 +33,16 @@ bool CpuHas([[maybe_unused]] const char* what) {
 }
 
 std::vector<LaneWidthInfo> MakeWidths() {
-    std::vector<LaneWidthInfo> w = {{1, "baseline", true, &RunBatchW1, &SampleChainW1},
-                                    {4, "baseline", true, &RunBatchW4, &SampleChainW4}};
+    std::vector<LaneWidthInfo> w = {
+        {1, "baseline", true, &RunBatchW1, &SampleChainW1, &SampleLanesW1},
+        {4, "baseline", true, &RunBatchW4, &SampleChainW4, &SampleLanesW4}};
 #if RS_HAVE_AVX2_UNIT
-    w.push_back({8, "avx2", CpuHas("avx2"), &RunBatchW8Avx2, &SampleChainW8Avx2});
+    w.push_back({8, "avx2", CpuHas("avx2"), &RunBatchW8Avx2, &SampleChainW8Avx2,
+                 &SampleLanesW8Avx2});
 #endif
 #if RS_HAVE_AVX512_UNIT
-    w.push_back(
-        {16, "avx512", CpuHas("avx512"), &RunBatchW16Avx512, &SampleChainW16Avx512});
+    w.push_back({16, "avx512", CpuHas("avx512"), &RunBatchW16Avx512,
+                 &SampleChainW16Avx512, &SampleLanesW16Avx512});
 #endif
     return w;
 }
@@ -137,6 +139,8 @@ BatchJob MakeBatchJob(const Kernel& kernel, const Textures& textures,
     job.params = params.get();
     job.budget = kernel.Budget();
     job.textures = textures;
+    if (!job.textures.padded)
+        job.textures = BindTextures(*textures.height, textures.sampler);
     return job;
 }
 

@@ -59,6 +59,12 @@ using BatchFn = void (*)(const BatchJob& job, LaneBatch& batch);
 using SampleChainFn = float (*)(const Textures& textures, const float* u, const float* v,
                                 int n, int chain, uint64_t* texelReads);
 
+/// n fetches, one per lane of consecutive packs (the last pack padded with inactive
+/// lanes): out[i] = the height sampler at (u[i], v[i]); texels[i] = the texels it read.
+/// The lane sampler's test entry point.
+using SampleLanesFn = void (*)(const Textures& textures, const float* u, const float* v,
+                               int n, float* out, uint32_t* texels);
+
 /// The lane widths this binary has, in increasing order, and whether this CPU runs each.
 struct LaneWidthInfo {
     int width;
@@ -66,6 +72,7 @@ struct LaneWidthInfo {
     bool supported;
     BatchFn fn;
     SampleChainFn sampleChain;
+    SampleLanesFn sampleLanes;
 };
 std::span<const LaneWidthInfo> LaneWidths();
 
@@ -87,7 +94,8 @@ RayRun MarchRay(const BatchJob& job, const MarchInput& in, const TraceSink& trac
 /// One ray through a given lane width's batch function (as lane 0 of a pack).
 RayRun MarchRayAt(const LaneWidthInfo& width, const BatchJob& job, const MarchInput& in);
 
-/// A BatchJob for a configured kernel; `params` keeps its Params alive.
+/// A BatchJob for a configured kernel; `params` keeps its Params alive. Binds the padded
+/// texels (BindTextures) when `textures` has none.
 BatchJob MakeBatchJob(const Kernel& kernel, const Textures& textures,
                       std::shared_ptr<const void>& params);
 

@@ -229,28 +229,58 @@ void RunBatch(const BatchJob& job, LaneBatch& b) {
     });
 }
 
-/// SampleChainFn of one lane width.
+/// SampleChainFn of one lane width: kPacksInFlight packs' chains interleaved, as the
+/// driver runs packs.
 template <class L>
 float SampleChain(const Textures& tex, const float* u0, const float* v0, int n, int chain,
                   uint64_t* texelReads) {
     using F = typename L::F;
+    constexpr int N = L::kWidth, P = kPacksInFlight;
     F sum(0.0f);
     double texels = 0.0;
-    for (int base = 0; base + L::kWidth <= n; base += L::kWidth) {
-        F u(0.0f), v(0.0f), reads(0.0f);
-        u.copy_from(u0 + base, stdx::element_aligned);
-        v.copy_from(v0 + base, stdx::element_aligned);
-        const typename L::M all(true);
-        for (int k = 0; k < chain; ++k) {
-            const F h = SampleHeightLanes<L>(tex, u, v, all, reads);
-            u = u + h * F(0.01f) + F(0.0031f);
-            v = v + F(0.0017f);
-            sum = sum + h;
+    const typename L::M all(true);
+    for (int base = 0; base + N <= n; base += N * P) {
+        F u[P], v[P], reads[P];
+        const int packs = std::min(P, (n - base) / N);
+        for (int j = 0; j < packs; ++j) {
+            u[j].copy_from(u0 + base + j * N, stdx::element_aligned);
+            v[j].copy_from(v0 + base + j * N, stdx::element_aligned);
+            reads[j] = F(0.0f);
         }
-        texels += double(stdx::reduce(reads));
+        for (int k = 0; k < chain; ++k) {
+            for (int j = 0; j < packs; ++j) {
+                const F h = SampleHeightLanes<L>(tex, u[j], v[j], all, reads[j]);
+                u[j] = u[j] + h * F(0.01f) + F(0.0031f);
+                v[j] = v[j] + F(0.0017f);
+                sum = sum + h;
+            }
+        }
+        for (int j = 0; j < packs; ++j) texels += double(stdx::reduce(reads[j]));
     }
     *texelReads += uint64_t(texels);
     return stdx::reduce(sum);
+}
+
+/// SampleLanesFn of one lane width.
+template <class L>
+void SampleLanes(const Textures& tex, const float* u0, const float* v0, int n, float* out,
+                 uint32_t* texels) {
+    using F = typename L::F;
+    constexpr int N = L::kWidth;
+    for (int base = 0; base < n; base += N) {
+        F u(0.0f), v(0.0f), reads(0.0f);
+        typename L::M active(false);
+        for (int k = 0; k < N; ++k) {
+            const int i = std::min(base + k, n - 1);
+            u[k] = u0[i], v[k] = v0[i];
+            active[k] = base + k < n;
+        }
+        const F h = SampleHeightLanes<L>(tex, u, v, active, reads);
+        for (int k = 0; k < N && base + k < n; ++k) {
+            out[base + k] = h[k];
+            texels[base + k] = uint32_t(reads[k]);
+        }
+    }
 }
 
 }  // namespace reliefsim::detail
@@ -262,6 +292,8 @@ float SampleChain(const Textures& tex, const float* u0, const float* v0, int n, 
     void RunBatch##suffix(const BatchJob& job, LaneBatch& batch);                       \
     float SampleChain##suffix(const Textures& textures, const float* u, const float* v, \
                               int n, int chain, uint64_t* texelReads);                  \
+    void SampleLanes##suffix(const Textures& textures, const float* u, const float* v,  \
+                             int n, float* out, uint32_t* texels);                      \
     }
 #define RS_DEFINE_LANE_WIDTH(suffix, width)                                             \
     RS_DECLARE_LANE_WIDTH(suffix)                                                       \
@@ -276,5 +308,9 @@ float SampleChain(const Textures& tex, const float* u0, const float* v0, int n, 
                               int n, int chain, uint64_t* texelReads) {                 \
         return detail::SampleChain<Lanes<width, Isa##suffix>>(textures, u, v, n, chain, \
                                                               texelReads);              \
+    }                                                                                   \
+    void SampleLanes##suffix(const Textures& textures, const float* u, const float* v,  \
+                             int n, float* out, uint32_t* texels) {                     \
+        detail::SampleLanes<Lanes<width, Isa##suffix>>(textures, u, v, n, out, texels); \
     }                                                                                   \
     }

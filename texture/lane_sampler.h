@@ -1,22 +1,39 @@
 // The counted sampler over lanes: one fetch per active lane, bit-identical to
 // Sampler<true> (texture/sampler.h) lane by lane, at any lane width.
 //
-// Bilinear filtering with float arithmetic (the default and the hot path) runs on the
-// lanes; nearest, min-of-4 and the 8-bit arithmetics run lane by lane through the scalar
-// sampler. Every texel read of the lane path goes through Texels(), the one choke point
-// that counts them (and, in debug builds, checks the index).
+// Nearest, bilinear (float and gpu8 weights) and min-of-4 run on the lanes over the
+// padded texels (texture/padded_texels.h): a footprint is one address and two 64-bit
+// loads per lane. llvmpipe's 8-bit fixed-point arithmetic, and textures bound without
+// padded texels, run lane by lane through the scalar sampler. Every texel read of the
+// lane path goes through the footprint loaders below, which (in debug builds) check the
+// index; texel counts are added per fetch.
 #pragma once
 
+#include <memory>
+
 #include "kernels/lanes.h"
+#include "texture/padded_texels.h"
 #include "texture/sampler.h"
+
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
 
 namespace reliefsim {
 
-/// The textures a kernel reads: the height map and its sampler (derived maps join here).
+/// The textures a kernel reads: the height map, its sampler and the height map's padded
+/// texels for the sampler's wrap mode (derived maps join here).
 struct Textures {
     const HeightField* height = nullptr;
     SamplerState sampler;
+    std::shared_ptr<const PaddedTexels> padded;  ///< null: the scalar sampler per lane
 };
+
+/// Textures for `field` sampled with `state`, with the padded texels the lanes read.
+inline Textures BindTextures(const HeightField& field, SamplerState state) {
+    return {&field, state,
+            std::make_shared<const PaddedTexels>(PadTexels(field, state.wrap))};
+}
 
 namespace detail {
 
@@ -64,13 +81,114 @@ RS_INLINE LinearAxisLanes<L> WrapLinearLanes(typename L::F u, int n, WrapMode wr
     return a;
 }
 
-/// The one place the lane sampler reads texels: data[index] per lane.
+/// detail::WrapNearest over lanes, the same operations in the same order.
 template <class L>
-RS_INLINE typename L::F Texels(const float* data, [[maybe_unused]] int64_t count,
-                               const typename L::I& index) {
+RS_INLINE typename L::I WrapNearestLanes(typename L::F u, int n, WrapMode wrap) {
+    using F = typename L::F;
+    using I = typename L::I;
+    const F fn = F(float(n));
+    auto clampIndex = [n](const I& i) {
+        return Select(i < I(0), I(0), Select(i > I(n - 1), I(n - 1), i));
+    };
+    if (wrap == WrapMode::Clamp)
+        return clampIndex(TruncToIntLanes<L>(stdx::trunc(u * fn)));
+    if (IsPowerOfTwo(n)) return TruncToIntLanes<L>(stdx::floor(u * fn)) & I(n - 1);
+    const F f = ::reliefsim::MinSse(u - stdx::floor(u), F(0x1.fffffep-1f));
+    return clampIndex(TruncToIntLanes<L>(f * fn));
+}
+
+/// The four texels of each lane's footprint: data[base], data[base + 1] (row 0) and
+/// data[base + stride], data[base + stride + 1] (row 1). One of the two places the lane
+/// sampler reads texels (TexelLanes is the other).
+template <class L>
+struct Footprint {
+    typename L::F t00, t10, t01, t11;
+};
+
+#if defined(__SSE2__)
+/// Lanes k and k + 1's texel pairs at p[a] and p[b] as one register: {a0, a1, b0, b1}.
+RS_INLINE __m128 LoadPairs(const float* pa, const float* pb) {
+    const __m128 lo = _mm_castsi128_ps(_mm_loadu_si64(pa));
+    return _mm_loadh_pi(lo, reinterpret_cast<const __m64*>(pb));
+}
+#endif
+
+#if defined(__AVX2__)
+/// The footprints of 8 lanes (texel offsets at[0..7]): per row, the pairs of lanes
+/// {0,1,4,5} and {2,3,6,7} in two registers, whose even and odd elements are then texels
+/// 0 and 1 of lanes 0..7 in order.
+template <class V>
+RS_INLINE void Footprint8(const float* data, int64_t stride, const int32_t* at, V& t00,
+                          V& t10, V& t01, V& t11) {
+    for (int row = 0; row < 2; ++row) {
+        const float* p = data + row * stride;
+        const __m256 a = _mm256_set_m128(LoadPairs(p + at[4], p + at[5]),
+                                         LoadPairs(p + at[0], p + at[1]));
+        const __m256 b = _mm256_set_m128(LoadPairs(p + at[6], p + at[7]),
+                                         LoadPairs(p + at[2], p + at[3]));
+        (row == 0 ? t00 : t01) = V(_mm256_shuffle_ps(a, b, 0x88));
+        (row == 0 ? t10 : t11) = V(_mm256_shuffle_ps(a, b, 0xDD));
+    }
+}
+#endif
+
+template <class L>
+RS_INLINE Footprint<L> LoadFootprint(const PaddedTexels& tex, const typename L::I& base) {
+    using F = typename L::F;
+    constexpr int N = L::kWidth;
+    const float* data = tex.texels.data();
+    const int64_t stride = tex.stride;
+    alignas(64) int32_t at[N];
+    base.copy_to(at, stdx::vector_aligned);
+    for ([[maybe_unused]] int k = 0; k < N; ++k)
+        RS_DCHECK(at[k] >= 0 && at[k] + stride + 1 < tex.Count());
+    Footprint<L> f;
+#if defined(__AVX2__)
+    if constexpr (N == 8) {
+        Footprint8(data, stride, at, f.t00, f.t10, f.t01, f.t11);
+        return f;
+    }
+#endif
+#if defined(__AVX512F__) && defined(__AVX512DQ__)
+    if constexpr (N == 16) {
+        __m256 lo[4], hi[4];
+        Footprint8(data, stride, at, lo[0], lo[1], lo[2], lo[3]);
+        Footprint8(data, stride, at + 8, hi[0], hi[1], hi[2], hi[3]);
+        F* outs[4] = {&f.t00, &f.t10, &f.t01, &f.t11};
+        for (int q = 0; q < 4; ++q)
+            *outs[q] = F(_mm512_insertf32x8(_mm512_castps256_ps512(lo[q]), hi[q], 1));
+        return f;
+    }
+#endif
+#if defined(__SSE2__)
+    if constexpr (N == 4) {
+        for (int row = 0; row < 2; ++row) {
+            const float* p = data + row * stride;
+            const __m128 a = LoadPairs(p + at[0], p + at[1]);
+            const __m128 b = LoadPairs(p + at[2], p + at[3]);
+            (row == 0 ? f.t00 : f.t01) = F(_mm_shuffle_ps(a, b, 0x88));
+            (row == 0 ? f.t10 : f.t11) = F(_mm_shuffle_ps(a, b, 0xDD));
+        }
+        return f;
+    }
+#endif
+    f.t00 = F([&](auto k) { return data[at[k]]; });
+    f.t10 = F([&](auto k) { return data[at[k] + 1]; });
+    f.t01 = F([&](auto k) { return data[at[k] + stride]; });
+    f.t11 = F([&](auto k) { return data[at[k] + stride + 1]; });
+    return f;
+}
+
+/// One texel per lane: data[index].
+template <class L>
+RS_INLINE typename L::F TexelLanes(const PaddedTexels& tex, const typename L::I& index) {
+    constexpr int N = L::kWidth;
+    alignas(64) int32_t at[N];
+    index.copy_to(at, stdx::vector_aligned);
+    const float* data = tex.texels.data();
     return typename L::F([&](auto k) {
-        RS_DCHECK(index[k] >= 0 && index[k] < count);
-        return data[index[k]];
+        RS_DCHECK(at[k] >= 0 && at[k] < tex.Count());
+        return data[at[k]];
     });
 }
 
@@ -86,24 +204,33 @@ RS_INLINE typename L::F SampleHeightLanes(const Textures& tex, const typename L:
                                           typename L::F& texelReads) {
     using F = typename L::F;
     using I = typename L::I;
-    const HeightField& field = *tex.height;
     const SamplerState& st = tex.sampler;
-    if (st.filter == Filter::Bilinear && st.precision == Precision::Float) {
-        const auto s = detail::WrapLinearLanes<L>(u, field.width, st.wrap);
-        const auto t = detail::WrapLinearLanes<L>(v, field.height, st.wrap);
-        const I w(field.width);
-        const I row0 = t.i0 * w, row1 = t.i1 * w;
-        const float* data = field.depth.data();
-        const int64_t count = int64_t(field.depth.size());
-        const F t00 = detail::Texels<L>(data, count, row0 + s.i0);
-        const F t10 = detail::Texels<L>(data, count, row0 + s.i1);
-        const F t01 = detail::Texels<L>(data, count, row1 + s.i0);
-        const F t11 = detail::Texels<L>(data, count, row1 + s.i1);
-        const F r0 = stdx::fma(s.w, t10 - t00, t00);
-        const F r1 = stdx::fma(s.w, t11 - t01, t01);
+    if (tex.padded && st.precision != Precision::Llvmpipe8) {
+        const PaddedTexels& p = *tex.padded;
+        if (st.filter == Filter::Nearest) {
+            const I i = detail::WrapNearestLanes<L>(u, p.width, st.wrap);
+            const I j = detail::WrapNearestLanes<L>(v, p.height, st.wrap);
+            Assign(active, texelReads, texelReads + F(1.0f));
+            return detail::TexelLanes<L>(p, j * I(p.stride) + i);
+        }
+        auto s = detail::WrapLinearLanes<L>(u, p.width, st.wrap);
+        auto t = detail::WrapLinearLanes<L>(v, p.height, st.wrap);
+        const auto f = detail::LoadFootprint<L>(p, t.i0 * I(p.stride) + s.i0);
         Assign(active, texelReads, texelReads + F(4.0f));
-        return stdx::fma(t.w, r1 - r0, r0);
+        if (st.filter == Filter::Min4) {
+            const F r0 = Select(s.w != F(0.0f), MinSse(f.t00, f.t10), f.t00);
+            const F r1 = Select(s.w != F(0.0f), MinSse(f.t01, f.t11), f.t01);
+            return Select(t.w != F(0.0f), MinSse(r0, r1), r0);
+        }
+        if (st.precision == Precision::Gpu8) {
+            s.w = stdx::nearbyint(s.w * F(256.0f)) * F(1.0f / 256.0f);
+            t.w = stdx::nearbyint(t.w * F(256.0f)) * F(1.0f / 256.0f);
+        }
+        const F r0 = Fma(s.w, f.t10 - f.t00, f.t00);
+        const F r1 = Fma(s.w, f.t11 - f.t01, f.t01);
+        return Fma(t.w, r1 - r0, r0);
     }
+    const HeightField& field = *tex.height;
     F out(0.0f);
     for (int k = 0; k < L::kWidth; ++k) {
         if (!active[k]) continue;

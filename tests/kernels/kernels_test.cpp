@@ -69,8 +69,8 @@ MarchRun March(const TestKernel& k, const HeightField& f, MarchInput in,
     values["early_exit"] = k.earlyExit ? 1 : 0;
     values["budget"] = k.budget;
     std::shared_ptr<const void> params;
-    const BatchJob job =
-        MakeBatchJob(reliefsim::MakeKernel(info, values), {&f, st}, params);
+    const BatchJob job = MakeBatchJob(reliefsim::MakeKernel(info, values),
+                                      reliefsim::BindTextures(f, st), params);
     const RayRun one = MarchRay(job, in);
     for (const LaneWidthInfo& w : LaneWidths()) {
         if (!w.supported) continue;

@@ -1,0 +1,25 @@
+#include "texture/padded_texels.h"
+
+#include "core/error.h"
+
+namespace reliefsim {
+
+PaddedTexels PadTexels(const HeightField& field, WrapMode wrap) {
+    RS_CHECK(!field.Empty());
+    PaddedTexels p;
+    p.width = field.width;
+    p.height = field.height;
+    p.stride = field.width + 1;
+    p.wrap = wrap;
+    p.texels.resize(size_t(p.stride) * size_t(field.height + 1));
+    const bool repeat = wrap == WrapMode::Repeat;
+    for (int j = 0; j <= field.height; ++j) {
+        const int sj = j < field.height ? j : (repeat ? 0 : field.height - 1);
+        float* row = p.texels.data() + size_t(j) * size_t(p.stride);
+        for (int i = 0; i < field.width; ++i) row[i] = field.At(i, sj);
+        row[field.width] = field.At(repeat ? 0 : field.width - 1, sj);
+    }
+    return p;
+}
+
+}  // namespace reliefsim
