@@ -196,7 +196,7 @@ struct LinearSearch {
     }
 
     template <class L>
-    static typename L::M Step(const Params& p, const LaneRay<L>& ray, State<L>& s,
+    RS_INLINE static typename L::M Step(const Params& p, const LaneRay<L>& ray, State<L>& s,
                               const typename L::F& h, const typename L::M& active,
                               Fetch<L>& next) {
         using F = typename L::F;
