@@ -70,7 +70,7 @@ void BM_Kernel(benchmark::State& state, const KernelInfo* info, LaneWidthInfo wi
         double(fetches) / (double(state.iterations()) * kRays);
 }
 
-void BM_SampleChain(benchmark::State& state, LaneWidthInfo width) {
+void BM_SampleChain(benchmark::State& state, LaneWidthInfo width, bool count) {
     if (!width.supported) {
         state.SkipWithError("this CPU lacks the ISA");
         return;
@@ -82,11 +82,12 @@ void BM_SampleChain(benchmark::State& state, LaneWidthInfo width) {
     const Textures tex = BindTextures(Field(), {});
     uint64_t texels = 0;
     for (auto _ : state)
-        benchmark::DoNotOptimize(
-            width.sampleChain(tex, u.data(), v.data(), kLanes, kChain, &texels));
+        benchmark::DoNotOptimize(width.sampleChain(tex, u.data(), v.data(), kLanes,
+                                                   kChain, count ? &texels : nullptr));
     state.SetItemsProcessed(int64_t(state.iterations()) * kLanes * kChain);
-    state.counters["texel_reads/fetch"] =
-        double(texels) / (double(state.iterations()) * kLanes * kChain);
+    if (count)
+        state.counters["texel_reads/fetch"] =
+            double(texels) / (double(state.iterations()) * kLanes * kChain);
 }
 
 template <bool kCount>
@@ -106,7 +107,11 @@ BENCHMARK_TEMPLATE(BM_SampleScalar, false);
 const int kRegistered = [] {
     for (const LaneWidthInfo& w : LaneWidths()) {
         benchmark::RegisterBenchmark(
-            ("BM_SampleChain/" + std::to_string(w.width)).c_str(), BM_SampleChain, w);
+            ("BM_SampleChain/" + std::to_string(w.width)).c_str(), BM_SampleChain, w,
+            true);
+        benchmark::RegisterBenchmark(
+            ("BM_SampleChainUncounted/" + std::to_string(w.width)).c_str(),
+            BM_SampleChain, w, false);
         for (const KernelInfo* m : Methods())
             benchmark::RegisterBenchmark(
                 ("BM_Kernel/" + std::string(m->name) + "/" + std::to_string(w.width))

@@ -196,9 +196,9 @@ struct LinearSearch {
     }
 
     template <class L>
-    RS_INLINE static typename L::M Step(const Params& p, const LaneRay<L>& ray, State<L>& s,
-                              const typename L::F& h, const typename L::M& active,
-                              Fetch<L>& next) {
+    RS_INLINE static typename L::M Step(const Params& p, const LaneRay<L>& ray,
+                                        State<L>& s, const typename L::F& h,
+                                        const typename L::M& active, Fetch<L>& next) {
         using F = typename L::F;
         using M = typename L::M;
         const F one(1.0f);

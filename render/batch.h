@@ -55,7 +55,8 @@ using BatchFn = void (*)(const BatchJob& job, LaneBatch& batch);
 
 /// The sampler microbenchmark's loop: n lanes each make `chain` dependent counted fetches
 /// (the next uv moves by the sampled value, so fetches cannot overlap within a lane, as
-/// in a kernel); returns a checksum and adds the texels read to *texelReads.
+/// in a kernel); returns a checksum and adds the texels read to *texelReads (null: the
+/// same loop without counting, the benchmark's baseline).
 using SampleChainFn = float (*)(const Textures& textures, const float* u, const float* v,
                                 int n, int chain, uint64_t* texelReads);
 

@@ -230,10 +230,10 @@ void RunBatch(const BatchJob& job, LaneBatch& b) {
 }
 
 /// SampleChainFn of one lane width: kPacksInFlight packs' chains interleaved, as the
-/// driver runs packs.
-template <class L>
-float SampleChain(const Textures& tex, const float* u0, const float* v0, int n, int chain,
-                  uint64_t* texelReads) {
+/// driver runs packs; kCount = false is the uncounted baseline.
+template <class L, bool kCount>
+float SampleChainCounted(const Textures& tex, const float* u0, const float* v0, int n,
+                         int chain, uint64_t* texelReads) {
     using F = typename L::F;
     constexpr int N = L::kWidth, P = kPacksInFlight;
     F sum(0.0f);
@@ -249,7 +249,7 @@ float SampleChain(const Textures& tex, const float* u0, const float* v0, int n, 
         }
         for (int k = 0; k < chain; ++k) {
             for (int j = 0; j < packs; ++j) {
-                const F h = SampleHeightLanes<L>(tex, u[j], v[j], all, reads[j]);
+                const F h = SampleHeightLanes<L, kCount>(tex, u[j], v[j], all, reads[j]);
                 u[j] = u[j] + h * F(0.01f) + F(0.0031f);
                 v[j] = v[j] + F(0.0017f);
                 sum = sum + h;
@@ -257,8 +257,15 @@ float SampleChain(const Textures& tex, const float* u0, const float* v0, int n, 
         }
         for (int j = 0; j < packs; ++j) texels += double(stdx::reduce(reads[j]));
     }
-    *texelReads += uint64_t(texels);
+    if constexpr (kCount) *texelReads += uint64_t(texels);
     return stdx::reduce(sum);
+}
+
+template <class L>
+float SampleChain(const Textures& tex, const float* u0, const float* v0, int n, int chain,
+                  uint64_t* texelReads) {
+    return texelReads ? SampleChainCounted<L, true>(tex, u0, v0, n, chain, texelReads)
+                      : SampleChainCounted<L, false>(tex, u0, v0, n, chain, nullptr);
 }
 
 /// SampleLanesFn of one lane width.

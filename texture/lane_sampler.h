@@ -195,9 +195,10 @@ RS_INLINE typename L::F TexelLanes(const PaddedTexels& tex, const typename L::I&
 }  // namespace detail
 
 /// One fetch per active lane with the textures' height sampler; adds the texels each
-/// active lane read to texelReads. Inactive lanes return an unspecified value and read
+/// active lane read to texelReads (kCount = false: leaves it alone, the uncounted
+/// baseline of the benchmarks). Inactive lanes return an unspecified value and read
 /// in-range texels (their coordinates are those of an earlier fetch).
-template <class L>
+template <class L, bool kCount = true>
 RS_INLINE typename L::F SampleHeightLanes(const Textures& tex, const typename L::F& u,
                                           const typename L::F& v,
                                           const typename L::M& active,
@@ -210,13 +211,13 @@ RS_INLINE typename L::F SampleHeightLanes(const Textures& tex, const typename L:
         if (st.filter == Filter::Nearest) {
             const I i = detail::WrapNearestLanes<L>(u, p.width, st.wrap);
             const I j = detail::WrapNearestLanes<L>(v, p.height, st.wrap);
-            Assign(active, texelReads, texelReads + F(1.0f));
+            if constexpr (kCount) Assign(active, texelReads, texelReads + F(1.0f));
             return detail::TexelLanes<L>(p, j * I(p.stride) + i);
         }
         auto s = detail::WrapLinearLanes<L>(u, p.width, st.wrap);
         auto t = detail::WrapLinearLanes<L>(v, p.height, st.wrap);
         const auto f = detail::LoadFootprint<L>(p, t.i0 * I(p.stride) + s.i0);
-        Assign(active, texelReads, texelReads + F(4.0f));
+        if constexpr (kCount) Assign(active, texelReads, texelReads + F(4.0f));
         if (st.filter == Filter::Min4) {
             const F r0 = Select(s.w != F(0.0f), MinSse(f.t00, f.t10), f.t00);
             const F r1 = Select(s.w != F(0.0f), MinSse(f.t01, f.t11), f.t01);
@@ -236,7 +237,7 @@ RS_INLINE typename L::F SampleHeightLanes(const Textures& tex, const typename L:
         if (!active[k]) continue;
         FetchCounts counts;
         out[k] = SampleCounted(field, st, u[k], v[k], &counts);
-        texelReads[k] = texelReads[k] + float(counts.nTexelReads);
+        if constexpr (kCount) texelReads[k] = texelReads[k] + float(counts.nTexelReads);
     }
     return out;
 }

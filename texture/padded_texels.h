@@ -11,11 +11,11 @@
 namespace reliefsim {
 
 /// A copy of a HeightField's depths with one extra column and one extra row that hold the
-/// texel the wrap mode reads past the last one (repeat: the first column / row; clamp: the
-/// last). For every uv the bilinear footprint whose first texel is (i0, j0) is then the
-/// texels base, base + 1, base + stride and base + stride + 1 with base = j0 * stride + i0
-/// (research/llvmpipe.md §2.1 gives i1 = i0 + 1, or the wrapped / clamped index that the
-/// extra column holds), so a footprint is two 64-bit loads and one address.
+/// texel the wrap mode reads past the last one (repeat: the first column / row; clamp:
+/// the last). For every uv the bilinear footprint whose first texel is (i0, j0) is then
+/// the texels base, base + 1, base + stride and base + stride + 1 with base = j0 * stride
+/// + i0 (research/llvmpipe.md §2.1 gives i1 = i0 + 1, or the wrapped / clamped index that
+/// the extra column holds), so a footprint is two 64-bit loads and one address.
 struct PaddedTexels {
     int width = 0, height = 0;  ///< of the field
     int stride = 0;             ///< width + 1
