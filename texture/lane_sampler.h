@@ -3,10 +3,11 @@
 //
 // Nearest, bilinear (float and gpu8 weights) and min-of-4 run on the lanes over the
 // padded texels (texture/padded_texels.h): a footprint is one address and two 64-bit
-// loads per lane. llvmpipe's 8-bit fixed-point arithmetic, and textures bound without
-// padded texels, run lane by lane through the scalar sampler. Every texel read of the
-// lane path goes through the footprint loaders below, which (in debug builds) check the
-// index; texel counts are added per fetch.
+// loads per lane. llvmpipe's 8-bit fixed-point bilinear runs on the lanes in 32-bit
+// integers over the field's 8-bit texels. Only textures bound without padded texels run
+// lane by lane through the scalar sampler. Every texel read of the lane path goes through
+// LoadFootprint, TexelLanes or Texel8Lanes, which (in debug builds) check the index;
+// texel counts are added per fetch.
 #pragma once
 
 #include <memory>
@@ -192,6 +193,62 @@ RS_INLINE typename L::F TexelLanes(const PaddedTexels& tex, const typename L::I&
     });
 }
 
+/// detail::WrapLinearFixed8 over lanes in 32-bit integers. With r = round(x) (INT_MIN
+/// out of range, as cvtps2dq) the scalar s = int64(r) - 128 gives i = s >> 8 and
+/// w = s & 255; written as r = 256 a + b that is i = a - (b < 128), w = (b + 128) & 255,
+/// which never overflows.
+template <class L>
+struct FixedAxisLanes {
+    typename L::I i0, i1, w;
+};
+
+template <class L>
+RS_INLINE FixedAxisLanes<L> WrapLinearFixed8Lanes(typename L::F u, int n, WrapMode wrap) {
+    using F = typename L::F;
+    using I = typename L::I;
+    const bool pow2 = IsPowerOfTwo(n);
+    if (wrap == WrapMode::Repeat && !pow2) u = u - stdx::floor(u);
+    const I r = TruncToIntLanes<L>(stdx::nearbyint(u * F(float(n * 256))));
+    const I b = r & I(255);
+    const I i = (r >> 8) - Select(b < I(128), I(1), I(0));
+    FixedAxisLanes<L> a;
+    a.w = (b + I(128)) & I(255);
+    if (wrap == WrapMode::Clamp) {
+        auto clampIndex = [n](const I& k) {
+            return Select(k < I(0), I(0), Select(k > I(n - 1), I(n - 1), k));
+        };
+        a.i0 = clampIndex(i);
+        a.i1 = clampIndex(i + I(1));
+    } else if (pow2) {
+        a.i0 = i & I(n - 1);
+        a.i1 = (i + I(1)) & I(n - 1);
+    } else {
+        a.i0 = Select(i < I(0), I(n - 1), i);
+        a.i1 = Select(a.i0 == I(n - 1), I(0), a.i0 + I(1));
+    }
+    return a;
+}
+
+/// detail::Lerp8 over lanes.
+template <class I>
+RS_INLINE I Lerp8Lanes(const I& w, const I& a, const I& b) {
+    return (a + ((w * (b - a) * I(128) + I(16384)) >> 15)) & I(255);
+}
+
+/// One 8-bit texel per lane: depth8[index]. The choke point of the 8-bit path.
+template <class L>
+RS_INLINE typename L::I Texel8Lanes(const HeightField& field,
+                                    const typename L::I& index) {
+    constexpr int N = L::kWidth;
+    alignas(64) int32_t at[N];
+    index.copy_to(at, stdx::vector_aligned);
+    const uint8_t* data = field.depth8.data();
+    return typename L::I([&](auto k) {
+        RS_DCHECK(at[k] >= 0 && size_t(at[k]) < field.depth8.size());
+        return int32_t(data[at[k]]);
+    });
+}
+
 }  // namespace detail
 
 /// One fetch per active lane with the textures' height sampler; adds the texels each
@@ -206,7 +263,26 @@ RS_INLINE typename L::F SampleHeightLanes(const Textures& tex, const typename L:
     using F = typename L::F;
     using I = typename L::I;
     const SamplerState& st = tex.sampler;
-    if (tex.padded && st.precision != Precision::Llvmpipe8) {
+    const HeightField& field = *tex.height;
+    const bool fixed8 =
+        st.precision == Precision::Llvmpipe8 && st.filter == Filter::Bilinear;
+    if (fixed8 && !field.depth8.empty()) {
+        // llvmpipe's AoS 8.8 fixed-point bilinear (research/llvmpipe.md §2.2), on lanes.
+        const auto s = detail::WrapLinearFixed8Lanes<L>(u, field.width, st.wrap);
+        const auto t = detail::WrapLinearFixed8Lanes<L>(v, field.height, st.wrap);
+        const I w(field.width);
+        const I row0 = t.i0 * w, row1 = t.i1 * w;
+        const I t00 = detail::Texel8Lanes<L>(field, row0 + s.i0);
+        const I t10 = detail::Texel8Lanes<L>(field, row0 + s.i1);
+        const I t01 = detail::Texel8Lanes<L>(field, row1 + s.i0);
+        const I t11 = detail::Texel8Lanes<L>(field, row1 + s.i1);
+        const I r0 = detail::Lerp8Lanes(s.w, t00, t10);
+        const I r1 = detail::Lerp8Lanes(s.w, t01, t11);
+        if constexpr (kCount) Assign(active, texelReads, texelReads + F(4.0f));
+        return stdx::static_simd_cast<F>(detail::Lerp8Lanes(t.w, r0, r1)) *
+               F(float(1.0 / 255.0));
+    }
+    if (tex.padded && !fixed8) {
         const PaddedTexels& p = *tex.padded;
         if (st.filter == Filter::Nearest) {
             const I i = detail::WrapNearestLanes<L>(u, p.width, st.wrap);
@@ -231,7 +307,6 @@ RS_INLINE typename L::F SampleHeightLanes(const Textures& tex, const typename L:
         const F r1 = Fma(s.w, f.t11 - f.t01, f.t01);
         return Fma(t.w, r1 - r0, r0);
     }
-    const HeightField& field = *tex.height;
     F out(0.0f);
     for (int k = 0; k < L::kWidth; ++k) {
         if (!active[k]) continue;
