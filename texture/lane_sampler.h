@@ -82,25 +82,41 @@ RS_INLINE LinearAxisLanes<L> WrapLinearLanes(typename L::F u, int n, WrapMode wr
     return a;
 }
 
+/// i clamped to [0, n - 1] per lane.
+template <class I>
+RS_INLINE I ClampIndexLanes(const I& i, int n) {
+    return Select(i < I(0), I(0), Select(i > I(n - 1), I(n - 1), i));
+}
+
+/// values[index] per lane as lane type V: the element reads of TexelLanes and
+/// Texel8Lanes.
+template <class V, int N, class T, class Index>
+RS_INLINE V GatherLanes(const T* values, [[maybe_unused]] size_t count,
+                        const Index& index) {
+    alignas(64) int32_t at[N];
+    index.copy_to(at, stdx::vector_aligned);
+    return V([&](auto k) {
+        RS_DCHECK(at[k] >= 0 && size_t(at[k]) < count);
+        return typename V::value_type(values[at[k]]);
+    });
+}
+
 /// detail::WrapNearest over lanes, the same operations in the same order.
 template <class L>
 RS_INLINE typename L::I WrapNearestLanes(typename L::F u, int n, WrapMode wrap) {
     using F = typename L::F;
     using I = typename L::I;
     const F fn = F(float(n));
-    auto clampIndex = [n](const I& i) {
-        return Select(i < I(0), I(0), Select(i > I(n - 1), I(n - 1), i));
-    };
     if (wrap == WrapMode::Clamp)
-        return clampIndex(TruncToIntLanes<L>(stdx::trunc(u * fn)));
+        return ClampIndexLanes(TruncToIntLanes<L>(stdx::trunc(u * fn)), n);
     if (IsPowerOfTwo(n)) return TruncToIntLanes<L>(stdx::floor(u * fn)) & I(n - 1);
     const F f = ::reliefsim::MinSse(u - stdx::floor(u), F(0x1.fffffep-1f));
-    return clampIndex(TruncToIntLanes<L>(f * fn));
+    return ClampIndexLanes(TruncToIntLanes<L>(f * fn), n);
 }
 
 /// The four texels of each lane's footprint: data[base], data[base + 1] (row 0) and
-/// data[base + stride], data[base + stride + 1] (row 1). One of the two places the lane
-/// sampler reads texels (TexelLanes is the other).
+/// data[base + stride], data[base + stride + 1] (row 1). The lane sampler reads texels
+/// only through LoadFootprint, TexelLanes and Texel8Lanes.
 template <class L>
 struct Footprint {
     typename L::F t00, t10, t01, t11;
@@ -183,14 +199,8 @@ RS_INLINE Footprint<L> LoadFootprint(const PaddedTexels& tex, const typename L::
 /// One texel per lane: data[index].
 template <class L>
 RS_INLINE typename L::F TexelLanes(const PaddedTexels& tex, const typename L::I& index) {
-    constexpr int N = L::kWidth;
-    alignas(64) int32_t at[N];
-    index.copy_to(at, stdx::vector_aligned);
-    const float* data = tex.texels.data();
-    return typename L::F([&](auto k) {
-        RS_DCHECK(at[k] >= 0 && at[k] < tex.Count());
-        return data[at[k]];
-    });
+    return GatherLanes<typename L::F, L::kWidth>(tex.texels.data(), tex.texels.size(),
+                                                 index);
 }
 
 /// detail::WrapLinearFixed8 over lanes in 32-bit integers. With r = round(x) (INT_MIN
@@ -214,11 +224,8 @@ RS_INLINE FixedAxisLanes<L> WrapLinearFixed8Lanes(typename L::F u, int n, WrapMo
     FixedAxisLanes<L> a;
     a.w = (b + I(128)) & I(255);
     if (wrap == WrapMode::Clamp) {
-        auto clampIndex = [n](const I& k) {
-            return Select(k < I(0), I(0), Select(k > I(n - 1), I(n - 1), k));
-        };
-        a.i0 = clampIndex(i);
-        a.i1 = clampIndex(i + I(1));
+        a.i0 = ClampIndexLanes(i, n);
+        a.i1 = ClampIndexLanes(i + I(1), n);
     } else if (pow2) {
         a.i0 = i & I(n - 1);
         a.i1 = (i + I(1)) & I(n - 1);
@@ -235,18 +242,12 @@ RS_INLINE I Lerp8Lanes(const I& w, const I& a, const I& b) {
     return (a + ((w * (b - a) * I(128) + I(16384)) >> 15)) & I(255);
 }
 
-/// One 8-bit texel per lane: depth8[index]. The choke point of the 8-bit path.
+/// One 8-bit texel per lane: depth8[index].
 template <class L>
 RS_INLINE typename L::I Texel8Lanes(const HeightField& field,
                                     const typename L::I& index) {
-    constexpr int N = L::kWidth;
-    alignas(64) int32_t at[N];
-    index.copy_to(at, stdx::vector_aligned);
-    const uint8_t* data = field.depth8.data();
-    return typename L::I([&](auto k) {
-        RS_DCHECK(at[k] >= 0 && size_t(at[k]) < field.depth8.size());
-        return int32_t(data[at[k]]);
-    });
+    return GatherLanes<typename L::I, L::kWidth>(field.depth8.data(), field.depth8.size(),
+                                                 index);
 }
 
 }  // namespace detail
