@@ -4,9 +4,13 @@
 //   rays;
 //                                 counted fetches/s = items/s x fetches/ray
 //   BM_SampleChain/<lanes>        dependent counted bilinear fetches, items = fetches
+//   BM_SampleChainRawAvx2/<packs>  the same chain as a plain AVX2 intrinsics loop,
+//   uncounted
+//                                 (bench/raw_chain_avx2.cpp): the reference point
 //   BM_SampleScalar<counted>      the scalar Sampler, counted and uncounted
 #include <benchmark/benchmark.h>
 
+#include "bench/raw_chain.h"
 #include "render/batch.h"
 #include "texture/procedural.h"
 #include "texture/sampler.h"
@@ -89,6 +93,26 @@ void BM_SampleChain(benchmark::State& state, LaneWidthInfo width, bool count) {
         state.counters["texel_reads/fetch"] =
             double(texels) / (double(state.iterations()) * kLanes * kChain);
 }
+
+void BM_SampleChainRawAvx2(benchmark::State& state, int packs) {
+    if (!bench::RawChainAvx2Available() || !__builtin_cpu_supports("avx2") ||
+        !__builtin_cpu_supports("fma")) {
+        state.SkipWithError("no AVX2 loop in this build or CPU");
+        return;
+    }
+    constexpr int kLanes = 64, kChain = 256;
+    std::vector<float> u(kLanes), v(kLanes);
+    for (int i = 0; i < kLanes; ++i)
+        u[size_t(i)] = float(i) / kLanes, v[size_t(i)] = 0.3f;
+    const Textures tex = BindTextures(Field(), {});
+    for (auto _ : state)
+        benchmark::DoNotOptimize(
+            bench::RawChainAvx2(*tex.padded, u.data(), v.data(), kLanes, kChain, packs));
+    state.SetItemsProcessed(int64_t(state.iterations()) * kLanes * kChain);
+}
+BENCHMARK_CAPTURE(BM_SampleChainRawAvx2, 1, 1);
+BENCHMARK_CAPTURE(BM_SampleChainRawAvx2, 2, 2);
+BENCHMARK_CAPTURE(BM_SampleChainRawAvx2, 4, 4);
 
 template <bool kCount>
 void BM_SampleScalar(benchmark::State& state) {

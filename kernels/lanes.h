@@ -18,7 +18,7 @@
 
 #include "core/error.h"
 
-#if defined(__FMA__) || defined(__AVX512F__)
+#if defined(__SSE2__)
 #include <immintrin.h>
 #endif
 
@@ -70,6 +70,21 @@ RS_INLINE V MaxSse(const V& a, const V& b) {
 template <class L>
 RS_INLINE typename L::I TruncToIntLanes(typename L::F f) {
     using F = typename L::F;
+    using I = typename L::I;
+    // The instruction itself where the unit's ISA has it (its out-of-range result is
+    // INT_MIN by definition); the portable form below costs four more operations.
+#if defined(__AVX512F__)
+    if constexpr (sizeof(F) == 64 && sizeof(I) == 64)
+        return I(_mm512_cvttps_epi32(static_cast<__m512>(f)));
+#endif
+#if defined(__AVX__)
+    if constexpr (sizeof(F) == 32 && sizeof(I) == 32)
+        return I(_mm256_cvttps_epi32(static_cast<__m256>(f)));
+#endif
+#if defined(__SSE2__)
+    if constexpr (L::kWidth == 4 && sizeof(F) == 16 && sizeof(I) == 16)
+        return I(_mm_cvttps_epi32(static_cast<__m128>(f)));
+#endif
     const auto inRange = (f >= F(-2147483648.0f)) && (f < F(2147483648.0f));
     stdx::where(!inRange, f) = F(-2147483648.0f);
     return stdx::static_simd_cast<typename L::I>(f);

@@ -158,13 +158,14 @@ struct LinearSearch {
         using M = typename L::M;
         F t, tAbove, hAbove, tBelow, hBelow;  // coarse search
         M haveAbove, found;
-        F i, k;              // coarse and refinement loop counters
-        F nCoarse, nRefine;  // iterations of the algorithms
-        F s, tb;             // binary search
-        F t1, h1, t2, h2;    // interval / secant bracket
-        F tInt, best;        // interval and secant points
-        M converged;         // secant stop test met
-        F tResult;           // the point returned if the lane stops now
+        // The loop counters of Alg. 1-3 are the iteration counts: the coarse loop's i
+        // equals nCoarse whenever it is tested, the refinement loop's k equals nRefine.
+        F nCoarse, nRefine;
+        F s, tb;           // binary search
+        F t1, h1, t2, h2;  // interval / secant bracket
+        F tInt, best;      // interval and secant points
+        M converged;       // secant stop test met
+        F tResult;         // the point returned if the lane stops now
         F phase;
     };
 
@@ -187,7 +188,7 @@ struct LinearSearch {
         const F zero(0.0f);
         s.t = s.tAbove = s.hAbove = s.tBelow = s.hBelow = zero;
         s.haveAbove = s.found = s.converged = M(false);
-        s.i = s.k = s.nCoarse = s.nRefine = zero;
+        s.nCoarse = s.nRefine = zero;
         s.s = s.tb = s.t1 = s.h1 = s.t2 = s.h2 = s.tInt = s.best = s.tResult = zero;
         s.phase = F(float(kCoarse));
         first.t = zero;
@@ -226,28 +227,30 @@ struct LinearSearch {
             const M stopEarly = p.earlyExit ? below : M(false);
             const M go = coarse && !stopEarly;
             Assign(go, s.t, s.t + stepSize);
-            Assign(go, s.i, s.i + one);
-            const M last = go && (s.i >= F(float(p.linearSteps)));
+            const M last = go && (s.nCoarse >= F(float(p.linearSteps)));
             const M more = go && !last;
-            // Refused by the budget, the lane answers the crossing found or where it is.
-            Assign(more, s.tResult, Select(s.found, s.tBelow, s.t));
+            // A lane the budget refuses here answers the crossing found or where it is:
+            // End() sets that for lanes still in kCoarse.
             Assign(more, tq, s.t);
             want = want || more;
             const M stop = (coarse && stopEarly) || last;
-            Assign(stop && !s.found, s.tBelow,
-                   s.t);  // the bottom, after linearSteps steps
-            Assign(stop, s.tResult, s.tBelow);
-            Assign(stop, s.phase, F(float(kDone)));
-            if constexpr (R != Refinement::None) {
-                const M refine = stop && s.haveAbove;
-                if constexpr (R == Refinement::Binary) {
-                    startRefine = refine;
-                } else {
-                    const M bottom = refine && !s.found;  // fetch the bracket's lower end
-                    Assign(bottom, tq, s.tBelow);
-                    Assign(bottom, s.phase, F(float(kBottom)));
-                    want = want || bottom;
-                    startRefine = refine && s.found;
+            if (Any(stop)) {
+                Assign(stop && !s.found, s.tBelow,
+                       s.t);  // the bottom, after linearSteps steps
+                Assign(stop, s.tResult, s.tBelow);
+                Assign(stop, s.phase, F(float(kDone)));
+                if constexpr (R != Refinement::None) {
+                    const M refine = stop && s.haveAbove;
+                    if constexpr (R == Refinement::Binary) {
+                        startRefine = refine;
+                    } else {
+                        const M bottom =
+                            refine && !s.found;  // fetch the bracket's lower end
+                        Assign(bottom, tq, s.tBelow);
+                        Assign(bottom, s.phase, F(float(kBottom)));
+                        want = want || bottom;
+                        startRefine = refine && s.found;
+                    }
                 }
             }
         }
@@ -273,13 +276,11 @@ struct LinearSearch {
                         s.converged ||
                         (open && (stdx::abs(h - s.tInt) <= F(p.secantTolerance)));
                 }
-                Assign(refine, s.k, s.k + one);
                 refineNext = refine;
             }
         }
         if constexpr (R != Refinement::None) {
             if (Any(startRefine)) {
-                Assign(startRefine, s.k, F(0.0f));
                 if constexpr (R == Refinement::Binary) {
                     Assign(startRefine, s.s, stepSize * F(0.5f));
                     Assign(startRefine, s.tb, s.tBelow - s.s);
@@ -305,7 +306,7 @@ struct LinearSearch {
             // The top of the refinement loop.
             if (Any(refineNext)) {
                 Assign(refineNext, s.phase, F(float(kDone)));
-                M go = refineNext && (s.k < F(float(p.refineSteps)));
+                M go = refineNext && (s.nRefine < F(float(p.refineSteps)));
                 if constexpr (R == Refinement::Binary) {
                     Assign(refineNext, s.tResult, s.tb);
                     Assign(go, tq, s.tb);
@@ -333,9 +334,14 @@ struct LinearSearch {
     template <class L>
     static void End(const Params&, const LaneRay<L>& ray, const State<L>& s,
                     LaneOutcome<L>& out) {
-        out.u = ray.U(s.tResult);
-        out.v = ray.V(s.tResult);
-        out.depth = s.tResult;
+        using F = typename L::F;
+        // A lane the budget stopped in the coarse search answers the crossing it found,
+        // else where it is (the GLSL twin sets this when Take() refuses).
+        const F tResult = Select(s.phase == F(float(kCoarse)),
+                                 Select(s.found, s.tBelow, s.t), s.tResult);
+        out.u = ray.U(tResult);
+        out.v = ray.V(tResult);
+        out.depth = tResult;
         out.nCoarse = s.nCoarse;
         out.nRefine = s.nRefine;
         out.hit = s.found;

@@ -48,13 +48,12 @@ RS_INLINE LaneRay<L> PixelToRayLanes(const ViewUniforms& u, const typename L::F&
 /// central differences of the height sampler (four uncounted fetches), albedo by depth,
 /// magenta where the kernel found no hit (docs/architecture.md "Shading").
 template <class L>
-RS_INLINE void ShadeHit(const Textures& tex, float slopeScale, const typename L::F& u,
+RS_INLINE void ShadeHit(const LaneTextures& tex, float slopeScale, const typename L::F& u,
                         const typename L::F& v, const typename L::F& depth,
                         const typename L::M& hit, const typename L::M& active,
                         typename L::F (&rgb)[3]) {
     using F = typename L::F;
-    const HeightField& field = *tex.height;
-    const float du = 1.0f / float(field.width), dv = 1.0f / float(field.height);
+    const float du = 1.0f / float(tex.width), dv = 1.0f / float(tex.height);
     F unused(0.0f);
     auto sample = [&](const F& su, const F& sv) {
         return SampleHeightLanes<L>(tex, su, sv, active, unused);
@@ -135,11 +134,10 @@ RS_INLINE void BeginPack(const typename K::Params& params, const BatchJob& job,
 /// budget. onFetch(active, fetch, sampled) sees every fetch.
 template <class K, class L, class OnFetch>
 RS_INLINE void TripPack(const typename K::Params& params, const BatchJob& job,
-                        PackRun<K, L>& p, OnFetch&& onFetch) {
+                        const LaneTextures& tex, PackRun<K, L>& p, OnFetch&& onFetch) {
     using F = typename L::F;
     using M = typename L::M;
-    const F sampled =
-        SampleHeightLanes<L>(job.textures, p.fetch.u, p.fetch.v, p.active, p.texels);
+    const F sampled = SampleHeightLanes<L>(tex, p.fetch.u, p.fetch.v, p.active, p.texels);
     Assign(p.active, p.fetches, p.fetches + F(1.0f));
     onFetch(p.active, p.fetch, sampled);
     M want = K::template Step<L>(params, p.ray, p.state, sampled, p.active, p.fetch);
@@ -154,14 +152,13 @@ RS_INLINE void TripPack(const typename K::Params& params, const BatchJob& job,
 /// Writes a finished pack's results (and its shading, when asked) into the batch.
 template <class K, class L>
 RS_INLINE void EndPack(const typename K::Params& params, const BatchJob& job,
-                       LaneBatch& b, const PackRun<K, L>& p) {
+                       const LaneTextures& tex, LaneBatch& b, const PackRun<K, L>& p) {
     using F = typename L::F;
     LaneOutcome<L> out;
     K::template End<L>(params, p.ray, p.state, out);
     F rgb[3] = {F(0.0f), F(0.0f), F(0.0f)};
     if (b.rgb)
-        ShadeHit<L>(job.textures, job.slopeScale, out.u, out.v, out.depth, out.hit,
-                    p.valid, rgb);
+        ShadeHit<L>(tex, job.slopeScale, out.u, out.v, out.depth, out.hit, p.valid, rgb);
     for (int k = 0; k < L::kWidth; ++k) {
         if (!p.valid[k]) continue;
         const int i = p.base + k;
@@ -189,6 +186,7 @@ RS_INLINE void EndPack(const typename K::Params& params, const BatchJob& job,
 template <class K, class L, int kPacks, class OnFetch>
 void MarchPacks(const typename K::Params& params, const BatchJob& job, LaneBatch& b,
                 OnFetch&& onFetch) {
+    const LaneTextures tex = BindLanes(job.textures);
     PackRun<K, L> run[kPacks];
     bool busy[kPacks] = {};
     int next = 0, nBusy = 0;
@@ -200,9 +198,9 @@ void MarchPacks(const typename K::Params& params, const BatchJob& job, LaneBatch
     while (nBusy > 0) {
         for (int j = 0; j < kPacks; ++j) {
             if (!busy[j]) continue;
-            TripPack<K, L>(params, job, run[j], onFetch);
+            TripPack<K, L>(params, job, tex, run[j], onFetch);
             if (Any(run[j].active)) continue;
-            EndPack<K, L>(params, job, b, run[j]);
+            EndPack<K, L>(params, job, tex, b, run[j]);
             if (next < b.n) {
                 BeginPack<K, L>(params, job, b, next, run[j]);
                 next += L::kWidth;
@@ -232,9 +230,10 @@ void RunBatch(const BatchJob& job, LaneBatch& b) {
 /// SampleChainFn of one lane width: kPacksInFlight packs' chains interleaved, as the
 /// driver runs packs; kCount = false is the uncounted baseline.
 template <class L, bool kCount>
-float SampleChainCounted(const Textures& tex, const float* u0, const float* v0, int n,
-                         int chain, uint64_t* texelReads) {
+float SampleChainCounted(const Textures& textures, const float* u0, const float* v0,
+                         int n, int chain, uint64_t* texelReads) {
     using F = typename L::F;
+    const LaneTextures tex = BindLanes(textures);
     constexpr int N = L::kWidth, P = kPacksInFlight;
     F sum(0.0f);
     double texels = 0.0;
@@ -270,9 +269,10 @@ float SampleChain(const Textures& tex, const float* u0, const float* v0, int n, 
 
 /// SampleLanesFn of one lane width.
 template <class L>
-void SampleLanes(const Textures& tex, const float* u0, const float* v0, int n, float* out,
-                 uint32_t* texels) {
+void SampleLanes(const Textures& textures, const float* u0, const float* v0, int n,
+                 float* out, uint32_t* texels) {
     using F = typename L::F;
+    const LaneTextures tex = BindLanes(textures);
     constexpr int N = L::kWidth;
     for (int base = 0; base < n; base += N) {
         F u(0.0f), v(0.0f), reads(0.0f);

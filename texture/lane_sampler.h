@@ -36,6 +36,44 @@ inline Textures BindTextures(const HeightField& field, SamplerState state) {
             std::make_shared<const PaddedTexels>(PadTexels(field, state.wrap))};
 }
 
+/// Textures resolved for the lanes: what a fetch reads, as plain values. The driver
+/// builds one per batch as a local, so the fetch loop reloads nothing through pointers
+/// and tests no ownership (measured: bench/kernels_bench BM_SampleChain).
+struct LaneTextures {
+    const HeightField* field = nullptr;
+    SamplerState sampler;
+    const float* padded = nullptr;  ///< null: the scalar sampler per lane
+    int64_t paddedCount = 0;
+    const uint8_t* depth8 = nullptr;  ///< set for llvmpipe's 8-bit bilinear
+    int64_t depth8Count = 0;
+    int width = 0, height = 0;  ///< of the field
+    int stride = 0;             ///< of the padded texels
+    bool pow2W = false, pow2H = false;
+};
+
+inline LaneTextures BindLanes(const Textures& t) {
+    LaneTextures b;
+    b.field = t.height;
+    b.sampler = t.sampler;
+    b.width = t.height->width;
+    b.height = t.height->height;
+    b.pow2W = detail::IsPowerOfTwo(b.width);
+    b.pow2H = detail::IsPowerOfTwo(b.height);
+    const bool fixed8 = t.sampler.precision == Precision::Llvmpipe8 &&
+                        t.sampler.filter == Filter::Bilinear;
+    if (fixed8 && !t.height->depth8.empty()) {
+        b.depth8 = t.height->depth8.data();
+        b.depth8Count = int64_t(t.height->depth8.size());
+    } else if (t.padded && !fixed8) {
+        RS_CHECK(t.padded->width == b.width && t.padded->height == b.height &&
+                 t.padded->wrap == t.sampler.wrap);
+        b.padded = t.padded->texels.data();
+        b.paddedCount = t.padded->Count();
+        b.stride = t.padded->stride;
+    }
+    return b;
+}
+
 namespace detail {
 
 template <class L>
@@ -47,7 +85,8 @@ struct LinearAxisLanes {
 /// detail::WrapLinear over lanes (research/llvmpipe.md §2.1), the same operations in the
 /// same order.
 template <class L>
-RS_INLINE LinearAxisLanes<L> WrapLinearLanes(typename L::F u, int n, WrapMode wrap) {
+RS_INLINE LinearAxisLanes<L> WrapLinearLanes(typename L::F u, int n, WrapMode wrap,
+                                             bool pow2) {
     using F = typename L::F;
     using I = typename L::I;
     const F fn = F(float(n));
@@ -62,7 +101,7 @@ RS_INLINE LinearAxisLanes<L> WrapLinearLanes(typename L::F u, int n, WrapMode wr
         a.w = c - fl;
         const I next = a.i0 + I(1);
         a.i1 = Select(next < I(n - 1), next, I(n - 1));
-    } else if (IsPowerOfTwo(n)) {
+    } else if (pow2) {
         F c = u * fn;
         c = c - F(0.5f);
         const F fl = stdx::floor(c);
@@ -103,13 +142,14 @@ RS_INLINE V GatherLanes(const T* values, [[maybe_unused]] size_t count,
 
 /// detail::WrapNearest over lanes, the same operations in the same order.
 template <class L>
-RS_INLINE typename L::I WrapNearestLanes(typename L::F u, int n, WrapMode wrap) {
+RS_INLINE typename L::I WrapNearestLanes(typename L::F u, int n, WrapMode wrap,
+                                         bool pow2) {
     using F = typename L::F;
     using I = typename L::I;
     const F fn = F(float(n));
     if (wrap == WrapMode::Clamp)
         return ClampIndexLanes(TruncToIntLanes<L>(stdx::trunc(u * fn)), n);
-    if (IsPowerOfTwo(n)) return TruncToIntLanes<L>(stdx::floor(u * fn)) & I(n - 1);
+    if (pow2) return TruncToIntLanes<L>(stdx::floor(u * fn)) & I(n - 1);
     const F f = ::reliefsim::MinSse(u - stdx::floor(u), F(0x1.fffffep-1f));
     return ClampIndexLanes(TruncToIntLanes<L>(f * fn), n);
 }
@@ -150,15 +190,14 @@ RS_INLINE void Footprint8(const float* data, int64_t stride, const int32_t* at, 
 #endif
 
 template <class L>
-RS_INLINE Footprint<L> LoadFootprint(const PaddedTexels& tex, const typename L::I& base) {
+RS_INLINE Footprint<L> LoadFootprint(const float* data, [[maybe_unused]] int64_t count,
+                                     int64_t stride, const typename L::I& base) {
     using F = typename L::F;
     constexpr int N = L::kWidth;
-    const float* data = tex.texels.data();
-    const int64_t stride = tex.stride;
     alignas(64) int32_t at[N];
     base.copy_to(at, stdx::vector_aligned);
     for ([[maybe_unused]] int k = 0; k < N; ++k)
-        RS_DCHECK(at[k] >= 0 && at[k] + stride + 1 < tex.Count());
+        RS_DCHECK(at[k] >= 0 && at[k] + stride + 1 < count);
     Footprint<L> f;
 #if defined(__AVX2__)
     if constexpr (N == 8) {
@@ -198,8 +237,8 @@ RS_INLINE Footprint<L> LoadFootprint(const PaddedTexels& tex, const typename L::
 
 /// One texel per lane: data[index].
 template <class L>
-RS_INLINE typename L::F TexelLanes(const PaddedTexels& tex, const typename L::I& index) {
-    return GatherLanes<typename L::F, L::kWidth>(tex.texels.data(), tex.texels.size(),
+RS_INLINE typename L::F TexelLanes(const LaneTextures& tex, const typename L::I& index) {
+    return GatherLanes<typename L::F, L::kWidth>(tex.padded, size_t(tex.paddedCount),
                                                  index);
 }
 
@@ -213,10 +252,10 @@ struct FixedAxisLanes {
 };
 
 template <class L>
-RS_INLINE FixedAxisLanes<L> WrapLinearFixed8Lanes(typename L::F u, int n, WrapMode wrap) {
+RS_INLINE FixedAxisLanes<L> WrapLinearFixed8Lanes(typename L::F u, int n, WrapMode wrap,
+                                                  bool pow2) {
     using F = typename L::F;
     using I = typename L::I;
-    const bool pow2 = IsPowerOfTwo(n);
     if (wrap == WrapMode::Repeat && !pow2) u = u - stdx::floor(u);
     const I r = TruncToIntLanes<L>(stdx::nearbyint(u * F(float(n * 256))));
     const I b = r & I(255);
@@ -244,9 +283,8 @@ RS_INLINE I Lerp8Lanes(const I& w, const I& a, const I& b) {
 
 /// One 8-bit texel per lane: depth8[index].
 template <class L>
-RS_INLINE typename L::I Texel8Lanes(const HeightField& field,
-                                    const typename L::I& index) {
-    return GatherLanes<typename L::I, L::kWidth>(field.depth8.data(), field.depth8.size(),
+RS_INLINE typename L::I Texel8Lanes(const LaneTextures& tex, const typename L::I& index) {
+    return GatherLanes<typename L::I, L::kWidth>(tex.depth8, size_t(tex.depth8Count),
                                                  index);
 }
 
@@ -257,43 +295,41 @@ RS_INLINE typename L::I Texel8Lanes(const HeightField& field,
 /// baseline of the benchmarks). Inactive lanes return an unspecified value and read
 /// in-range texels (their coordinates are those of an earlier fetch).
 template <class L, bool kCount = true>
-RS_INLINE typename L::F SampleHeightLanes(const Textures& tex, const typename L::F& u,
+RS_INLINE typename L::F SampleHeightLanes(const LaneTextures& tex, const typename L::F& u,
                                           const typename L::F& v,
                                           const typename L::M& active,
                                           typename L::F& texelReads) {
     using F = typename L::F;
     using I = typename L::I;
     const SamplerState& st = tex.sampler;
-    const HeightField& field = *tex.height;
-    const bool fixed8 =
-        st.precision == Precision::Llvmpipe8 && st.filter == Filter::Bilinear;
-    if (fixed8 && !field.depth8.empty()) {
+    if (tex.depth8) {
         // llvmpipe's AoS 8.8 fixed-point bilinear (research/llvmpipe.md §2.2), on lanes.
-        const auto s = detail::WrapLinearFixed8Lanes<L>(u, field.width, st.wrap);
-        const auto t = detail::WrapLinearFixed8Lanes<L>(v, field.height, st.wrap);
-        const I w(field.width);
+        const auto s = detail::WrapLinearFixed8Lanes<L>(u, tex.width, st.wrap, tex.pow2W);
+        const auto t =
+            detail::WrapLinearFixed8Lanes<L>(v, tex.height, st.wrap, tex.pow2H);
+        const I w(tex.width);
         const I row0 = t.i0 * w, row1 = t.i1 * w;
-        const I t00 = detail::Texel8Lanes<L>(field, row0 + s.i0);
-        const I t10 = detail::Texel8Lanes<L>(field, row0 + s.i1);
-        const I t01 = detail::Texel8Lanes<L>(field, row1 + s.i0);
-        const I t11 = detail::Texel8Lanes<L>(field, row1 + s.i1);
+        const I t00 = detail::Texel8Lanes<L>(tex, row0 + s.i0);
+        const I t10 = detail::Texel8Lanes<L>(tex, row0 + s.i1);
+        const I t01 = detail::Texel8Lanes<L>(tex, row1 + s.i0);
+        const I t11 = detail::Texel8Lanes<L>(tex, row1 + s.i1);
         const I r0 = detail::Lerp8Lanes(s.w, t00, t10);
         const I r1 = detail::Lerp8Lanes(s.w, t01, t11);
         if constexpr (kCount) Assign(active, texelReads, texelReads + F(4.0f));
         return stdx::static_simd_cast<F>(detail::Lerp8Lanes(t.w, r0, r1)) *
                F(float(1.0 / 255.0));
     }
-    if (tex.padded && !fixed8) {
-        const PaddedTexels& p = *tex.padded;
+    if (tex.padded) {
         if (st.filter == Filter::Nearest) {
-            const I i = detail::WrapNearestLanes<L>(u, p.width, st.wrap);
-            const I j = detail::WrapNearestLanes<L>(v, p.height, st.wrap);
+            const I i = detail::WrapNearestLanes<L>(u, tex.width, st.wrap, tex.pow2W);
+            const I j = detail::WrapNearestLanes<L>(v, tex.height, st.wrap, tex.pow2H);
             if constexpr (kCount) Assign(active, texelReads, texelReads + F(1.0f));
-            return detail::TexelLanes<L>(p, j * I(p.stride) + i);
+            return detail::TexelLanes<L>(tex, j * I(tex.stride) + i);
         }
-        auto s = detail::WrapLinearLanes<L>(u, p.width, st.wrap);
-        auto t = detail::WrapLinearLanes<L>(v, p.height, st.wrap);
-        const auto f = detail::LoadFootprint<L>(p, t.i0 * I(p.stride) + s.i0);
+        auto s = detail::WrapLinearLanes<L>(u, tex.width, st.wrap, tex.pow2W);
+        auto t = detail::WrapLinearLanes<L>(v, tex.height, st.wrap, tex.pow2H);
+        const auto f = detail::LoadFootprint<L>(tex.padded, tex.paddedCount, tex.stride,
+                                                t.i0 * I(tex.stride) + s.i0);
         if constexpr (kCount) Assign(active, texelReads, texelReads + F(4.0f));
         if (st.filter == Filter::Min4) {
             const F r0 = Select(s.w != F(0.0f), MinSse(f.t00, f.t10), f.t00);
@@ -312,7 +348,7 @@ RS_INLINE typename L::F SampleHeightLanes(const Textures& tex, const typename L:
     for (int k = 0; k < L::kWidth; ++k) {
         if (!active[k]) continue;
         FetchCounts counts;
-        out[k] = SampleCounted(field, st, u[k], v[k], &counts);
+        out[k] = SampleCounted(*tex.field, st, u[k], v[k], &counts);
         if constexpr (kCount) texelReads[k] = texelReads[k] + float(counts.nTexelReads);
     }
     return out;
