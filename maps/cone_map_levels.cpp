@@ -11,7 +11,7 @@
 #include <limits>
 #include <vector>
 
-#include "texture/cone_map_detail.h"
+#include "maps/cone_map_detail.h"
 
 namespace reliefsim::detail {
 
