@@ -4,22 +4,14 @@
 // surface).
 //
 // The fast generator evaluates the same float Listing and skips only (source,
-// destination) pairs that provably cannot lower the running minimum. Two bounds do the
-// skipping:
-//  - the distance bound: the march starts at the destination and moves away from the
-//  source and
-//    down, so ratio >= |dst - src| / (apex - b) (b = destination depth);
-//  - the exit bound: the march stops only in a cell deeper than the ray, hence deeper
-//  than the
-//    ray's z after its first step, and the exit lies on the ray beyond the destination.
-//    With L = the distance from the destination to the nearest such cell within the
-//    ray's 22.5° sector (the exit field, precomputed per texel and sector), the exit is
-//    at least L further out and at least L * (b / |dst - src|) deeper, so ratio >= (delta
-//    + L) / (apex - b - L * b / delta).
-// Both are applied to single offsets and to 4x4, 8x8 and 32x32 groups of offsets. Float
-// error of the listing's march is accounted for by slack terms; the argument is in
-// docs/cone_maps.md
-// ("Exact pruning of the Listing").
+// destination) pairs that provably cannot lower the running minimum, by two bounds: the
+// distance bound (the march moves away from the source and down) and the exit bound (the
+// exit field: per texel and 22.5 degree sector, a lower bound of the distance to a cell
+// that can end the march). Both apply to single offsets and to 4x4, 8x8 and 32x32 groups
+// of offsets. Stages: BuildExitField, GroupTileOffsets and BoundSuperTiles set up the
+// bounds, RelaxedSearch::SearchTexel searches one texel (super-tiles, tiles, quarters,
+// offsets). Proofs, with the slack terms for float error: docs/cone_maps.md, section
+// "Exact pruning of the Listing".
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -87,11 +79,8 @@ RS_INLINE float ListingRatio(const HeightField& hf, float sx, float sy, float ds
     // Exit point deeper than the apex: the march only goes deeper (step z >= 0), ratio 1.
     if (!(dstz < src)) return 1.0f;
     float vx = dstx - sx, vy = dsty - sy, vz = dstz;
-    // Early out, provably exact (no margin): every float operation below is monotone, the
-    // march moves away from the source in x and y (the step has the sign of vx, vy) and
-    // down in z (pz >= dstz), so |ex| >= |vx|, |ey| >= |vy| and 0 < src - pz <= src -
-    // dstz, hence the listing's float ratio is >= this float bound, or it is 1 (pz >=
-    // src). (best = +inf, the brute force's default, never prunes.)
+    // Early out, provably exact (no margin; proof: docs/cone_maps.md, section "Early outs
+    // inside the march"). best = +inf, the brute force's default, never prunes.
     const bool prune = best < kInfF;
     if (prune) {
         const float lb = std::sqrt(vx * vx + vy * vy) / (src - dstz);
@@ -116,13 +105,8 @@ RS_INLINE float ListingRatio(const HeightField& hf, float sx, float sy, float ds
             pz += stz;
             if (pz >= src) return 1.0f;
             if (prune) {
-                // The same monotonicity bounds the ratio by the current point: the exit
-                // point lies further out and deeper. fl(sqrt(cx^2 + cy^2) / (src - pz))
-                // >= best is tested without sqrt or division: in double the squares, the
-                // sum and (src - pz)^2 are exact or within 2^-50, and the 2^-20 factor
-                // exceeds the float rounding of that quotient (< 2^-22), so this implies
-                // the float bound
-                // >= best.
+                // The same bound at the current point, without sqrt or division (proof:
+                // docs/cone_maps.md, section "Early outs inside the march").
                 const double cx = double(px - sx), cy = double(py - sy);
                 const double den = double(src - pz);
                 if (cx * cx + cy * cy >= best2 * den * den) return best;
@@ -187,7 +171,7 @@ std::vector<uint16_t> PackAll(const std::vector<float>& v) {
 /// of up to `steps` float additions (< 2^-24 each): E lies within eps of the ray from the
 /// exact destination centre along the float step vector. The same eps also covers the
 /// rounding of |E - src| against |dst - src| + the distance travelled
-/// (docs/cone_maps.md).
+/// (docs/cone_maps.md, section "Exit bound").
 ExitField MakeExitFieldSlack(const HeightField& hf, int steps) {
     ExitField f;
     const double n = double(std::max(hf.width, hf.height));
@@ -247,23 +231,23 @@ struct ExitTile {
     SectorBits mask;
 };
 
-ExitField BuildExitField(const HeightField& hf, int steps, float inv, bool wanted) {
-    ExitField f = MakeExitFieldSlack(hf, steps);
-    f.usable = f.usable && wanted;
-    if (!f.usable) return f;
-    const int W = hf.width, H = hf.height;
-    const size_t N = size_t(W) * size_t(H);
-    // Window radius: 1/8 uv (at least 8 texels); farther exits are bounded by the window
-    // edge.
-    const int Rx = std::max(8, (W + 7) / 8), Ry = std::max(8, (H + 7) / 8);
-    const double e = f.eps;
-    auto down = [](double v) {
-        float r = float(v);
-        if (double(r) > v) r = std::nextafter(r, 0.0f);
-        return std::max(r, 0.0f);
-    };
+/// v rounded to a float at most v (and at least 0).
+float FloatAtMost(double v) {
+    float r = float(v);
+    if (double(r) > v) r = std::nextafter(r, 0.0f);
+    return std::max(r, 0.0f);
+}
+
+/// The exit-field search window of radius (Rx, Ry) texels: its offsets (but (0, 0)) in
+/// 8x8 tiles, tiles sorted by their smallest distance to the eps-dilated cells.
+struct ExitWindow {
     std::vector<ExitOffset> offs;
     std::vector<ExitTile> tiles;
+};
+ExitWindow MakeExitWindow(int W, int H, int Rx, int Ry, double e) {
+    ExitWindow win;
+    std::vector<ExitOffset>& offs = win.offs;
+    std::vector<ExitTile>& tiles = win.tiles;
     for (int oy = -Ry; oy <= Ry; oy += kTile)
         for (int ox = -Rx; ox <= Rx; ox += kTile) {
             ExitTile t{int(offs.size()), 0, ox, oy, kInfF, 0};
@@ -274,9 +258,9 @@ ExitField BuildExitField(const HeightField& hf, int steps, float inv, bool wante
                     const double y0 = (dy - 0.5) / H - e, y1 = (dy + 0.5) / H + e;
                     const double ax = std::max({0.0, x0, -x1}),
                                  ay = std::max({0.0, y0, -y1});
-                    const ExitOffset o{dx, dy,
-                                       down(std::sqrt(ax * ax + ay * ay) * (1 - 1e-12)),
-                                       RectSectorMask(x0, x1, y0, y1)};
+                    const ExitOffset o{
+                        dx, dy, FloatAtMost(std::sqrt(ax * ax + ay * ay) * (1 - 1e-12)),
+                        RectSectorMask(x0, x1, y0, y1)};
                     offs.push_back(o);
                     t.minDist = std::min(t.minDist, o.dist);
                     t.mask |= o.mask;
@@ -287,11 +271,56 @@ ExitField BuildExitField(const HeightField& hf, int steps, float inv, bool wante
     std::stable_sort(
         tiles.begin(), tiles.end(),
         [](const ExitTile& a, const ExitTile& b) { return a.minDist < b.minDist; });
+    return win;
+}
+
+/// The exit field of texel (i, j) into L[0..kSectors): per sector, the distance to the
+/// nearest cell deeper than d (the march's z after its first step) in the window, `edge`
+/// when none is. winMax: 8x8 window maxima of depth (tiles without a deeper cell are
+/// skipped).
+void ExitDistancesOfTexel(const HeightField& hf, const ExitWindow& win,
+                          const std::vector<float>& winMax, int i, int j, float d,
+                          float edge, float* L) {
+    const int W = hf.width, H = hf.height;
+    std::fill(L, L + kSectors, edge);
+    float worst = edge;
+    for (const ExitTile& t : win.tiles) {
+        if (t.minDist >= worst) break;
+        SectorBits open = 0;
+        for (int k = 0; k < kSectors; ++k)
+            if ((t.mask >> k & 1u) && L[k] > t.minDist) open |= SectorBits(1u << k);
+        if (!open) continue;
+        if (!(winMax[size_t(Wrap(j + t.oy, H)) * size_t(W) + size_t(Wrap(i + t.ox, W))] >
+              d))
+            continue;
+        bool changed = false;
+        for (int o = t.begin; o < t.end; ++o) {
+            const ExitOffset& off = win.offs[size_t(o)];
+            if (!(off.mask & open)) continue;
+            if (!(hf.At(Wrap(i + off.dx, W), Wrap(j + off.dy, H)) > d)) continue;
+            changed |= LowerMasked(unsigned(off.mask), off.dist, L);
+        }
+        if (changed) worst = *std::max_element(L, L + kSectors);
+    }
+}
+
+/// The exit field (ExitField) of a map for `steps` steps; empty (usable = false) when
+/// its float argument does not hold or it is not wanted.
+ExitField BuildExitField(const HeightField& hf, int steps, float inv, bool wanted) {
+    ExitField f = MakeExitFieldSlack(hf, steps);
+    f.usable = f.usable && wanted;
+    if (!f.usable) return f;
+    const int W = hf.width, H = hf.height;
+    const size_t N = size_t(W) * size_t(H);
+    // Window radius: 1/8 uv (at least 8 texels); farther exits are bounded by the window
+    // edge.
+    const int Rx = std::max(8, (W + 7) / 8), Ry = std::max(8, (H + 7) / 8);
+    const double e = f.eps;
+    const ExitWindow win = MakeExitWindow(W, H, Rx, Ry, e);
     // Every cell outside the window is at least this far (its dilation included).
-    const float edge = down(std::min((Rx + 0.5) / W, (Ry + 0.5) / H) - e);
+    const float edge = FloatAtMost(std::min((Rx + 0.5) / W, (Ry + 0.5) / H) - e);
     float dmax = hf.depth[0];
     for (float d : hf.depth) dmax = std::max(dmax, d);
-    // 8x8 window maxima of depth, wrapped (tiles without a deeper cell are skipped).
     const std::vector<float> winMax = WindowMaxima(hf.depth, W, H, kTile);
     std::vector<float> Lf(N * kSectors, kInfF);
     tbb::parallel_for(
@@ -303,31 +332,11 @@ ExitField BuildExitField(const HeightField& hf, int steps, float inv, bool wante
                     // computes it (z only grows).
                     const float b = hf.At(i, j);
                     const float d = b + ListingStep(1.0f - b, steps, inv);
-                    float* L = &Lf[(size_t(j) * size_t(W) + size_t(i)) * kSectors];
                     if (!(d < dmax))
                         continue;  // nothing is deeper: no cell can end a march
-                    std::fill(L, L + kSectors, edge);
-                    float worst = edge;
-                    for (const ExitTile& t : tiles) {
-                        if (t.minDist >= worst) break;
-                        SectorBits open = 0;
-                        for (int k = 0; k < kSectors; ++k)
-                            if ((t.mask >> k & 1u) && L[k] > t.minDist)
-                                open |= SectorBits(1u << k);
-                        if (!open) continue;
-                        if (!(winMax[size_t(Wrap(j + t.oy, H)) * size_t(W) +
-                                     size_t(Wrap(i + t.ox, W))] > d))
-                            continue;
-                        bool changed = false;
-                        for (int o = t.begin; o < t.end; ++o) {
-                            const ExitOffset& off = offs[size_t(o)];
-                            if (!(off.mask & open)) continue;
-                            if (!(hf.At(Wrap(i + off.dx, W), Wrap(j + off.dy, H)) > d))
-                                continue;
-                            changed |= LowerMasked(unsigned(off.mask), off.dist, L);
-                        }
-                        if (changed) worst = *std::max_element(L, L + kSectors);
-                    }
+                    ExitDistancesOfTexel(
+                        hf, win, winMax, i, j, d, edge,
+                        &Lf[(size_t(j) * size_t(W) + size_t(i)) * kSectors]);
                 }
         });
     // Window minima of L per sector, for offset tiles (8x8) and their quarters (4x4).
@@ -345,8 +354,8 @@ ExitField BuildExitField(const HeightField& hf, int steps, float inv, bool wante
 /// source-to-destination distance >= dLo (exact uv), numerator factor invD <= (1 - 2^-20)
 /// / (distance + 2^-21) (so the depth gained per uv along the ray is >= b * invD),
 /// destination depth >= b and exit-field value >= L. Real numbers in double with slack
-/// for every float rounding (docs/cone_maps.md); the double roundings here are far inside
-/// the 2^-20 margins.
+/// for every float rounding (docs/cone_maps.md, section "Exit bound"); the double
+/// roundings here are far inside the 2^-20 margins.
 RS_INLINE bool ExitBoundPrunes(const ExitField& f, double dLo, double invD, double b,
                                double L, double apex, double best, double stepLo = 0) {
     // A lower bound of the distance the march travels from the destination before it
@@ -369,7 +378,7 @@ inline float MinOverSectors(const std::vector<uint16_t>& field, size_t t, unsign
 
 /// One offset of the pruned search, with what its tests need.
 struct RelaxedOffset {
-    double distLo;  ///< below the float distance bound (RelaxedTileLowerBound's margins)
+    double distLo;  ///< below the float distance bound (MakeRelaxedOffset's margins)
     double dist;    ///< exact uv distance
     double invD;    ///< (1 - 2^-20) / (dist + 2^-21), rounded down
     int dx, dy;
@@ -407,6 +416,332 @@ struct RelaxedTile {
 };
 enum class RelaxedOut { Ratio, ConeNormal, Stacked };
 
+/// The output of a relaxed map: ratios, n_z of them, or K stacked channels.
+struct RelaxedOutput {
+    RelaxedOut out = RelaxedOut::Ratio;
+    int K = 1;  ///< channels (stacked cones)
+    ConeMap m;
+    /// Apex depth of channel c at a texel of depth d.
+    float Apex(float d, int c) const {
+        return out == RelaxedOut::Stacked ? StackedApex(d, c, K) : d;
+    }
+    void Store(int i, int j, int c, float best) {
+        m.values[(size_t(j) * size_t(m.width) + size_t(i)) * size_t(K) + size_t(c)] =
+            out == RelaxedOut::ConeNormal ? ConeNormalFromRatio(double(best)) : best;
+    }
+};
+
+/// The brute force: every pair of the definition, no pruning (the oracle).
+void BruteRelaxedMap(const HeightField& hf, const ConeMapParams& p, const Geometry& g,
+                     RelaxedOutput& out) {
+    const int W = hf.width, H = hf.height, K = out.K;
+    const std::vector<Offset> offs = MakeOffsets(g, ConeKind::Cone);
+    ProgressCounter progress(p.progress, H);
+    tbb::parallel_for(tbb::blocked_range<int>(0, H, 1),
+                      [&](const tbb::blocked_range<int>& r) {
+                          for (int j = r.begin(); j < r.end(); ++j, progress.Add(1))
+                              for (int i = 0; i < W; ++i)
+                                  for (int c = 0; c < K; ++c) {
+                                      const float apex = out.Apex(hf.At(i, j), c);
+                                      float best = 1.0f;
+                                      for (const Offset& o : offs) {
+                                          const float r2 = RelaxedPairRatio(
+                                              hf, i, j, o.dx, o.dy, p.searchSteps, apex);
+                                          if (best > r2) best = r2;
+                                      }
+                                      out.Store(i, j, c, best);
+                                  }
+                      });
+}
+
+/// One offset of tile t with its bounds (margins: docs/cone_maps.md, section "Margins of
+/// the per-offset bounds").
+RelaxedOffset MakeRelaxedOffset(const Offset& off, const OffsetTile& t, const Geometry& g,
+                                int W, int H) {
+    RelaxedOffset ro;
+    ro.dist = std::sqrt(double(off.s)) / g.scale;
+    ro.distLo = std::max(0.0, ro.dist - 0x1p-20) * (1.0 - 0x1p-19);
+    ro.invD = (1.0 - 0x1p-20) * (1.0 - 0x1p-40) / (ro.dist + 0x1p-21);
+    ro.dx = off.dx;
+    ro.dy = off.dy;
+    ro.fdx = float(off.dx) / float(W);
+    ro.fdy = float(off.dy) / float(H);
+    ro.lx = uint8_t(off.dx - t.ox);
+    ro.ly = uint8_t(off.dy - t.oy);
+    // Sectors the listing's float step direction can lie in (tolerance:
+    // docs/cone_maps.md, section "Margins of the per-offset bounds").
+    const double angle = std::atan2(double(off.dy) / H, double(off.dx) / W);
+    const double tol = 0x1p-22 / ro.dist + 1e-12;
+    ro.mask = IntervalSectorMask(angle - tol, angle + tol);
+    return ro;
+}
+
+/// The offsets of the pruned search: the tiled offsets of the brute force (8x8 tiles
+/// sorted by distance), inside a tile grouped by 4x4 quarter, with the bounds of every
+/// quarter, tile and 32x32 super-tile.
+struct RelaxedGroups {
+    std::vector<RelaxedOffset> offs;
+    std::vector<RelaxedTile> tiles;
+    std::vector<RelaxedGroup> superBounds;  ///< per to.supers entry
+};
+
+/// Offsets and groups of every tile of `to`, quarter by quarter.
+void GroupTileOffsets(const TiledOffsets& to, const Geometry& g, int W, int H,
+                      RelaxedGroups& groups) {
+    std::vector<RelaxedOffset>& offs = groups.offs;
+    offs.reserve(to.offsets.size());
+    groups.tiles.resize(to.tiles.size());
+    for (size_t ti = 0; ti < to.tiles.size(); ++ti) {
+        const OffsetTile& t = to.tiles[ti];
+        RelaxedTile& rt = groups.tiles[ti];
+        std::vector<RelaxedOffset> q[4];
+        for (int o = t.begin; o < t.end; ++o) {
+            const RelaxedOffset off =
+                MakeRelaxedOffset(to.offsets[size_t(o)], t, g, W, H);
+            rt.nx = std::max(rt.nx, int(off.lx) + 1);
+            rt.ny = std::max(rt.ny, int(off.ly) + 1);
+            q[(off.lx >= 4 ? 1 : 0) + (off.ly >= 4 ? 2 : 0)].push_back(off);
+        }
+        rt.all.begin = rt.all.end = int(offs.size());
+        rt.all.ox = t.ox;
+        rt.all.oy = t.oy;
+        for (int k = 0; k < 4; ++k) {
+            RelaxedGroup& gq = rt.quarter[k];
+            gq.begin = gq.end = int(offs.size());
+            gq.ox = t.ox + (k & 1) * 4;
+            gq.oy = t.oy + (k >> 1) * 4;
+            for (const RelaxedOffset& off : q[k]) {
+                offs.push_back(off);
+                gq.Add(off);
+                rt.all.Add(off);
+            }
+        }
+    }
+}
+
+/// Bounds of the 32x32 super-tiles of the tiled offsets (to.supers, sorted by distance;
+/// their tiles sorted by distance inside). Any order of evaluation gives the same
+/// minimum.
+void BoundSuperTiles(const TiledOffsets& to, RelaxedGroups& groups) {
+    groups.superBounds.resize(to.supers.size());
+    for (size_t si = 0; si < to.supers.size(); ++si) {
+        const OffsetSuperTile& st = to.supers[si];
+        RelaxedGroup& sb = groups.superBounds[si];
+        sb.ox = st.ox;
+        sb.oy = st.oy;
+        for (int x = st.first; x < st.last; ++x)
+            sb.Add(groups.tiles[size_t(to.superOrder[size_t(x)])].all);
+    }
+}
+
+/// The running minimum of one (texel, channel) search and the destination that set it.
+struct RelaxedBest {
+    float best = 1.0f;
+    int argDx = 0, argDy = 0;
+    bool found = false;
+};
+
+/// The pruned search of one (source texel, apex): the listing's ratio of every pair that
+/// survives the bounds, tile group by tile group. Pruning is exact (the distance bound
+/// below the listing's float bound, for offsets and whole groups, and the exit bound): a
+/// pair is skipped only when its listing ratio provably cannot lower the running minimum;
+/// ties do not change it either (strict "<" as in the listing), so the minimum equals the
+/// brute force's for any order of evaluation (proof: docs/cone_maps.md, section "Exact
+/// pruning of the Listing").
+struct RelaxedSearch {
+    const HeightField& hf;
+    const TiledOffsets& to;
+    const RelaxedGroups& groups;
+    const std::vector<float>& win;    ///< depth minima over the 8x8 windows
+    const std::vector<float>& win32;  ///< ... 32x32 windows
+    const std::vector<float>& win4;   ///< ... 4x4 windows
+    const ExitField& ef;
+    int steps;  ///< the listing's search steps
+    float inv;  ///< PowerOfTwoInverse(steps)
+    float dmin;
+    int halfX;  ///< Geometry::halfX
+    // The texel searched and its running minimum.
+    int i = 0, j = 0;
+    float apex = 0;
+    double dApex = 0;
+    float sx = 0, sy = 0;  ///< the listing's source position
+    RelaxedBest rb;
+
+    RelaxedSearch(const HeightField& hf, const TiledOffsets& to,
+                  const RelaxedGroups& groups, const std::vector<float>& win,
+                  const std::vector<float>& win32, const std::vector<float>& win4,
+                  const ExitField& ef, int steps, float inv, float dmin, int halfX)
+        : hf(hf),
+          to(to),
+          groups(groups),
+          win(win),
+          win32(win32),
+          win4(win4),
+          ef(ef),
+          steps(steps),
+          inv(inv),
+          dmin(dmin),
+          halfX(halfX) {}
+
+    /// The listing's ratio of one pair; lowers the running minimum.
+    RS_INLINE void Consider(int dx, int dy, float fdx, float fdy, float b) {
+        const float r =
+            ListingRatio(hf, sx, sy, sx + fdx, sy + fdy, b, steps, inv, apex, rb.best);
+        if (rb.best > r) {
+            rb.best = r;
+            rb.argDx = dx;
+            rb.argDy = dy;
+            rb.found = true;
+        }
+    }
+
+    /// A group is skipped when no pair in it can lower `best`: no destination above the
+    /// apex in its window (minimum depth wmin at window index w), the distance bound, or
+    /// the exit bound (lwin: the exit field's minima over windows of the group's size).
+    RS_INLINE bool GroupPrunes(const RelaxedGroup& q, size_t w, float wmin,
+                               const std::vector<uint16_t>& lwin) const {
+        if (!(wmin < apex)) return true;
+        if (q.distLo >= double(rb.best) * (dApex - double(wmin))) return true;
+        if (!ef.usable) return false;
+        return ExitBoundPrunes(ef, q.dLo, q.invD, double(wmin),
+                               double(MinOverSectors(lwin, w, q.mask)), dApex,
+                               double(rb.best));
+    }
+
+    /// The same for one offset whose destination texel `dst` has depth b. The listing
+    /// samples exactly this texel as the destination (its float texel coordinate is
+    /// within W * 2^-22 < 1/2 of the centre), so the bounds with its depth hold for the
+    /// pair.
+    RS_INLINE bool OffsetPrunes(const RelaxedOffset& off, size_t dst, float b) const {
+        const double db = double(b);
+        if (!(b < apex) || off.distLo >= double(rb.best) * (dApex - db)) return true;
+        if (ef.usable) {
+            const float lp = MinOverSectors(ef.L, dst, off.mask);
+            // One step of the march is |v| (1 - b) / (b steps) long (float roundings of
+            // v, the scale and the step within the factors).
+            if (!(b > 0.0f)) return true;  // the listing gives NaN: ignored
+            const double stepLo = (off.dist - 0x1p-22) * (1.0 - db) /
+                                  (db * double(steps)) * (1.0 - 0x1p-20);
+            if (ExitBoundPrunes(ef, off.dist, off.invD, db, double(lp), dApex,
+                                double(rb.best), stepLo))
+                return true;
+        }
+        return false;
+    }
+
+    /// Every offset of tile t that survives its quarter's bound and its own.
+    void SearchTile(const RelaxedTile& t, int wx, int wy) {
+        const int W = hf.width, H = hf.height;
+        // Wrapped rows and columns of the tile's destinations.
+        size_t rowBase[kTile];
+        int col[kTile];
+        for (int a = 0; a < t.ny; ++a)
+            rowBase[a] = size_t(WrapNear(wy + a, H)) * size_t(W);
+        for (int a = 0; a < t.nx; ++a) col[a] = WrapNear(wx + a, W);
+        for (int k = 0; k < 4; ++k) {
+            const RelaxedGroup& q = t.quarter[k];
+            if (q.begin == q.end) continue;
+            const size_t w4 = rowBase[(k >> 1) * 4] + size_t(col[(k & 1) * 4]);
+            if (GroupPrunes(q, w4, win4[w4], ef.Lwin4)) continue;
+            for (int o = q.begin; o < q.end; ++o) {
+                const RelaxedOffset& off = groups.offs[size_t(o)];
+                const size_t dst = rowBase[off.ly] + size_t(col[off.lx]);
+                const float b = hf.depth[dst];
+                if (OffsetPrunes(off, dst, b)) continue;
+                Consider(off.dx, off.dy, off.fdx, off.fdy, b);
+            }
+        }
+    }
+
+    /// The tiles of super-tile si, nearest first, until the distance bound stops them.
+    void SearchSuperTile(size_t si, double reachAll) {
+        const int W = hf.width, H = hf.height;
+        const OffsetSuperTile& st = to.supers[si];
+        for (int x = st.first; x < st.last; ++x) {
+            const RelaxedTile& t = groups.tiles[size_t(to.superOrder[size_t(x)])];
+            if (t.all.distLo >= double(rb.best) * reachAll) break;  // sorted by distance
+            const int wx = WrapNear(i + t.all.ox, W), wy = WrapNear(j + t.all.oy, H);
+            const size_t w0 = size_t(wy) * size_t(W) + size_t(wx);
+            if (GroupPrunes(t.all, w0, win[w0], ef.Lwin)) continue;
+            SearchTile(t, wx, wy);
+        }
+    }
+
+    /// The minimum for texel (ti, tj) and apex `a`, seeded with the pair `seed` (the left
+    /// neighbour's minimiser, moved one texel) when seedOk.
+    RelaxedBest SearchTexel(int ti, int tj, float a, bool seedOk, int seedDx,
+                            int seedDy) {
+        const int W = hf.width, H = hf.height;
+        i = ti;
+        j = tj;
+        apex = a;
+        rb = RelaxedBest{};
+        // The listing's source position and offsets, the same float values as
+        // RelaxedPairRatio's; the destination depth is the texel's (it samples exactly
+        // it).
+        sx = (float(i) + 0.5f) / float(W);
+        sy = (float(j) + 0.5f) / float(H);
+        if (!(apex > dmin)) return rb;
+        // Seed with the destination that set the left neighbour's minimum (ratios are
+        // spatially coherent, so `best` starts near its final value and the bounds prune
+        // most of the search): any pair of the definition is an upper bound.
+        if (seedOk) {
+            const int dx = seedDx - 1, dy = seedDy;
+            if ((dx != 0 || dy != 0) && dx >= -halfX)
+                Consider(dx, dy, float(dx) / float(W), float(dy) / float(H),
+                         hf.At(Wrap(i + dx, W), Wrap(j + dy, H)));
+        }
+        dApex = double(apex);
+        const double reachAll = dApex - double(dmin);
+        for (size_t si = 0; si < to.supers.size(); ++si) {
+            const RelaxedGroup& sb = groups.superBounds[si];
+            if (sb.distLo >= double(rb.best) * reachAll) break;  // sorted by distance
+            const size_t ws = size_t(WrapNear(j + sb.oy, H)) * size_t(W) +
+                              size_t(WrapNear(i + sb.ox, W));
+            if (GroupPrunes(sb, ws, win32[ws], ef.Lwin32)) continue;
+            SearchSuperTile(si, reachAll);
+        }
+        return rb;
+    }
+};
+
+/// The pruned search of every texel and channel, rows in parallel; each texel's search is
+/// seeded by its left neighbour's minimiser (docs/cone_maps.md, section "Exact pruning of
+/// the Listing").
+void PrunedRelaxedMap(const HeightField& hf, const ConeMapParams& p, const Geometry& g,
+                      float dmin, bool exitField, RelaxedOutput& out) {
+    const int W = hf.width, H = hf.height, K = out.K;
+    const TiledOffsets to = MakeTiledOffsets(g, ConeKind::Cone);
+    SearchWindows sw;  // depth minima over 8x8 and 32x32 windows, as the tiled search's
+    MakeSearchWindows(hf, sw);
+    const std::vector<float> win4 = WindowMinima(hf.depth, W, H, 1, 4);
+    const float inv = PowerOfTwoInverse(p.searchSteps);
+    const ExitField ef = BuildExitField(hf, p.searchSteps, inv, exitField);
+    RelaxedGroups groups;
+    GroupTileOffsets(to, g, W, H, groups);
+    BoundSuperTiles(to, groups);
+    ProgressCounter progress(p.progress, H);
+    tbb::parallel_for(
+        tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& rows) {
+            RelaxedSearch search(hf, to, groups, sw.win8, sw.win32, win4, ef,
+                                 p.searchSteps, inv, dmin, g.halfX);
+            for (int j = rows.begin(); j < rows.end(); ++j, progress.Add(1)) {
+                int seedDx[16] = {}, seedDy[16] = {};
+                bool seedOk[16] = {};
+                for (int i = 0; i < W; ++i)
+                    for (int c = 0; c < K; ++c) {
+                        const RelaxedBest b =
+                            search.SearchTexel(i, j, out.Apex(hf.At(i, j), c), seedOk[c],
+                                               seedDx[c], seedDy[c]);
+                        seedOk[c] = b.found;
+                        seedDx[c] = b.argDx;
+                        seedDy[c] = b.argDy;
+                        out.Store(i, j, c, b.best);
+                    }
+            }
+        });
+}
+
 }  // namespace
 
 ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool brute,
@@ -418,272 +753,22 @@ ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool br
             std::to_string(hf.height) +
             " too large for the relaxed cone map; expected at most 2^20 texels a side "
             "(the float error bounds of its pruning assume it)");
-    const RelaxedOut out = outKind == ConeKind::ConeNormal ? RelaxedOut::ConeNormal
-                           : outKind == ConeKind::Stacked  ? RelaxedOut::Stacked
-                                                           : RelaxedOut::Ratio;
-    const int K = out == RelaxedOut::Stacked ? p.stackedCount : 1;
+    RelaxedOutput out;
+    out.out = outKind == ConeKind::ConeNormal ? RelaxedOut::ConeNormal
+              : outKind == ConeKind::Stacked  ? RelaxedOut::Stacked
+                                              : RelaxedOut::Ratio;
+    out.K = out.out == RelaxedOut::Stacked ? p.stackedCount : 1;
     const Geometry g = MakeGeometry(hf.width, hf.height);
-    const int W = hf.width, H = hf.height;
-    ConeMap m;
-    m.kind = outKind;
-    m.width = W;
-    m.height = H;
-    m.channels = K;
-    m.values.assign(size_t(W) * size_t(H) * size_t(K), 0.0f);
-    auto store = [&](int i, int j, int c, float best) {
-        m.values[(size_t(j) * size_t(W) + size_t(i)) * size_t(K) + size_t(c)] =
-            out == RelaxedOut::ConeNormal ? ConeNormalFromRatio(double(best)) : best;
-    };
-
-    if (brute) {
-        const std::vector<Offset> offs = MakeOffsets(g, ConeKind::Cone);
-        ProgressCounter progress(p.progress, H);
-        tbb::parallel_for(
-            tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
-                for (int j = r.begin(); j < r.end(); ++j, progress.Add(1))
-                    for (int i = 0; i < W; ++i)
-                        for (int c = 0; c < K; ++c) {
-                            const float apex = out == RelaxedOut::Stacked
-                                                   ? StackedApex(hf.At(i, j), c, K)
-                                                   : hf.At(i, j);
-                            float best = 1.0f;
-                            for (const Offset& o : offs) {
-                                const float r2 = RelaxedPairRatio(hf, i, j, o.dx, o.dy,
-                                                                  p.searchSteps, apex);
-                                if (best > r2) best = r2;
-                            }
-                            store(i, j, c, best);
-                        }
-            });
-        return m;
-    }
-
-    // The offsets of the brute force, in 8x8 tiles sorted by distance, with their bounds;
-    // inside a tile grouped by 4x4 quarter.
-    const TiledOffsets to = MakeTiledOffsets(g, ConeKind::Cone);
-    SearchWindows sw;  // depth minima over 8x8 and 32x32 windows, as the tiled search's
-    MakeSearchWindows(hf, sw);
-    const std::vector<float>& win = sw.win8;
-    const std::vector<float>& win32 = sw.win32;
-    const std::vector<float> win4 = WindowMinima(hf.depth, W, H, 1, 4);
-    const float inv = PowerOfTwoInverse(p.searchSteps);
-    const ExitField ef = BuildExitField(hf, p.searchSteps, inv, exitField);
-    std::vector<RelaxedOffset> offs;
-    offs.reserve(to.offsets.size());
-    std::vector<RelaxedTile> tiles(to.tiles.size());
-    for (size_t ti = 0; ti < to.tiles.size(); ++ti) {
-        const OffsetTile& t = to.tiles[ti];
-        RelaxedTile& rt = tiles[ti];
-        std::vector<RelaxedOffset> q[4];
-        for (int o = t.begin; o < t.end; ++o) {
-            const Offset& off = to.offsets[size_t(o)];
-            RelaxedOffset ro;
-            ro.dist = std::sqrt(double(off.s)) / g.scale;
-            // distLo / (d - b) is below the listing's float distance bound fl|v| / (d -
-            // b): |vx - dx/W| <= 3 * 2^-24 (three roundings of values below 2), so fl|v|
-            // >= dist - 2^-21, and the float sqrt, products, sum, difference and division
-            // lose at most 2^-22 relatively; the 2^-20 and 2^-19 slacks also cover the
-            // double rounding of the product distLo is compared against (best * (d - b)).
-            ro.distLo = std::max(0.0, ro.dist - 0x1p-20) * (1.0 - 0x1p-19);
-            ro.invD = (1.0 - 0x1p-20) * (1.0 - 0x1p-40) / (ro.dist + 0x1p-21);
-            ro.dx = off.dx;
-            ro.dy = off.dy;
-            ro.fdx = float(off.dx) / float(W);
-            ro.fdy = float(off.dy) / float(H);
-            ro.lx = uint8_t(off.dx - t.ox);
-            ro.ly = uint8_t(off.dy - t.oy);
-            // Sectors the listing's float step direction can lie in: its float offset is
-            // within 2^-22.5 uv of the exact one (|offset| >= 2^-20), so its angle is
-            // within 2^-22 / |offset| of the exact angle; the per-component scaling and
-            // rounding of the step keep weak inequalities between x, y and 0, and every
-            // sector boundary that matters here is of that kind only up to this
-            // tolerance.
-            const double angle = std::atan2(double(off.dy) / H, double(off.dx) / W);
-            const double tol = 0x1p-22 / ro.dist + 1e-12;
-            ro.mask = IntervalSectorMask(angle - tol, angle + tol);
-            rt.nx = std::max(rt.nx, int(ro.lx) + 1);
-            rt.ny = std::max(rt.ny, int(ro.ly) + 1);
-            q[(ro.lx >= 4 ? 1 : 0) + (ro.ly >= 4 ? 2 : 0)].push_back(ro);
-        }
-        rt.all.begin = rt.all.end = int(offs.size());
-        rt.all.ox = t.ox;
-        rt.all.oy = t.oy;
-        for (int k = 0; k < 4; ++k) {
-            RelaxedGroup& gq = rt.quarter[k];
-            gq.begin = gq.end = int(offs.size());
-            gq.ox = t.ox + (k & 1) * 4;
-            gq.oy = t.oy + (k >> 1) * 4;
-            for (const RelaxedOffset& ro : q[k]) {
-                offs.push_back(ro);
-                gq.Add(ro);
-                rt.all.Add(ro);
-            }
-        }
-    }
-    // Bounds of the 32x32 super-tiles of the tiled offsets (to.supers, sorted by
-    // distance; their tiles sorted by distance inside). Any order of evaluation gives the
-    // same minimum.
-    std::vector<RelaxedGroup> superBounds(to.supers.size());
-    for (size_t si = 0; si < to.supers.size(); ++si) {
-        const OffsetSuperTile& st = to.supers[si];
-        RelaxedGroup& sb = superBounds[si];
-        sb.ox = st.ox;
-        sb.oy = st.oy;
-        for (int x = st.first; x < st.last; ++x)
-            sb.Add(tiles[size_t(to.superOrder[size_t(x)])].all);
-    }
-    // Pruning is exact (the distance bound below the listing's float bound, for offsets
-    // and whole groups, and the exit bound): a pair is skipped only when its listing
-    // ratio provably cannot lower the running minimum; ties do not change it either
-    // (strict "<" as in the listing), so the minimum equals the brute force's for any
-    // order of evaluation.
-    ProgressCounter progress(p.progress, H);
-    tbb::parallel_for(
-        tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& rows) {
-            for (int j = rows.begin(); j < rows.end(); ++j, progress.Add(1)) {
-                int seedDx[16] = {}, seedDy[16] = {};
-                bool seedOk[16] = {};
-                for (int i = 0; i < W; ++i) {
-                    const float d = hf.At(i, j);
-                    for (int c = 0; c < K; ++c) {
-                        const float apex =
-                            out == RelaxedOut::Stacked ? StackedApex(d, c, K) : d;
-                        float best = 1.0f;
-                        int argDx = 0, argDy = 0;
-                        bool found = false;
-                        // The listing's source position and offsets, the same float
-                        // values as RelaxedPairRatio's; the destination depth is the
-                        // texel's (it samples exactly it).
-                        const float sx = (float(i) + 0.5f) / float(W),
-                                    sy = (float(j) + 0.5f) / float(H);
-                        auto consider = [&](int dx, int dy, float fdx, float fdy,
-                                            float b) {
-                            const float r =
-                                ListingRatio(hf, sx, sy, sx + fdx, sy + fdy, b,
-                                             p.searchSteps, inv, apex, best);
-                            if (best > r) {
-                                best = r;
-                                argDx = dx;
-                                argDy = dy;
-                                found = true;
-                            }
-                        };
-                        if (apex > dmin) {
-                            // Seed with the destination that set the left neighbour's
-                            // minimum (ratios are spatially coherent, so `best` starts
-                            // near its final value and the bounds prune most of the
-                            // search): any pair of the definition is an upper bound.
-                            if (seedOk[c]) {
-                                const int dx = seedDx[c] - 1, dy = seedDy[c];
-                                if ((dx != 0 || dy != 0) && dx >= -g.halfX)
-                                    consider(dx, dy, float(dx) / float(W),
-                                             float(dy) / float(H),
-                                             hf.At(Wrap(i + dx, W), Wrap(j + dy, H)));
-                            }
-                            const double dApex = double(apex);
-                            // A group is skipped when no pair in it can lower `best`: no
-                            // destination above the apex in its window, the distance
-                            // bound, or the exit bound.
-                            auto groupPrunes = [&](const RelaxedGroup& q, size_t w,
-                                                   float wmin,
-                                                   const std::vector<uint16_t>& lwin) {
-                                if (!(wmin < apex)) return true;
-                                if (q.distLo >= double(best) * (dApex - double(wmin)))
-                                    return true;
-                                if (!ef.usable) return false;
-                                return ExitBoundPrunes(
-                                    ef, q.dLo, q.invD, double(wmin),
-                                    double(MinOverSectors(lwin, w, q.mask)), dApex,
-                                    double(best));
-                            };
-                            const double reachAll = dApex - double(dmin);
-                            for (size_t si = 0; si < to.supers.size(); ++si) {
-                                const OffsetSuperTile& st = to.supers[si];
-                                const RelaxedGroup& sb = superBounds[si];
-                                if (sb.distLo >= double(best) * reachAll)
-                                    break;  // sorted by distance
-                                {
-                                    const size_t ws =
-                                        size_t(WrapNear(j + sb.oy, H)) * size_t(W) +
-                                        size_t(WrapNear(i + sb.ox, W));
-                                    if (groupPrunes(sb, ws, win32[ws], ef.Lwin32))
-                                        continue;
-                                }
-                                for (int x = st.first; x < st.last; ++x) {
-                                    const RelaxedTile& t =
-                                        tiles[size_t(to.superOrder[size_t(x)])];
-                                    if (t.all.distLo >= double(best) * reachAll)
-                                        break;  // sorted by distance
-                                    const int wx = WrapNear(i + t.all.ox, W),
-                                              wy = WrapNear(j + t.all.oy, H);
-                                    const size_t w0 = size_t(wy) * size_t(W) + size_t(wx);
-                                    if (groupPrunes(t.all, w0, win[w0], ef.Lwin))
-                                        continue;
-                                    // Wrapped rows and columns of the tile's
-                                    // destinations.
-                                    size_t rowBase[kTile];
-                                    int col[kTile];
-                                    for (int a = 0; a < t.ny; ++a)
-                                        rowBase[a] =
-                                            size_t(WrapNear(wy + a, H)) * size_t(W);
-                                    for (int a = 0; a < t.nx; ++a)
-                                        col[a] = WrapNear(wx + a, W);
-                                    for (int k = 0; k < 4; ++k) {
-                                        const RelaxedGroup& q = t.quarter[k];
-                                        if (q.begin == q.end) continue;
-                                        const size_t w4 = rowBase[(k >> 1) * 4] +
-                                                          size_t(col[(k & 1) * 4]);
-                                        if (groupPrunes(q, w4, win4[w4], ef.Lwin4))
-                                            continue;
-                                        for (int o = q.begin; o < q.end; ++o) {
-                                            const RelaxedOffset& off = offs[size_t(o)];
-                                            // The listing samples exactly this texel as
-                                            // the destination (its float texel coordinate
-                                            // is within W * 2^-22 < 1/2 of the centre),
-                                            // so the bounds with this texel's depth hold
-                                            // for the pair.
-                                            const size_t dst =
-                                                rowBase[off.ly] + size_t(col[off.lx]);
-                                            const float b = hf.depth[dst];
-                                            const double db = double(b);
-                                            if (!(b < apex) ||
-                                                off.distLo >= double(best) * (dApex - db))
-                                                continue;
-                                            if (ef.usable) {
-                                                const float lp =
-                                                    MinOverSectors(ef.L, dst, off.mask);
-                                                // One step of the march is |v| (1 - b) /
-                                                // (b steps) long (float roundings of v,
-                                                // the scale and the step within the
-                                                // factors).
-                                                if (!(b > 0.0f))
-                                                    continue;  // the listing gives NaN:
-                                                               // ignored
-                                                const double stepLo =
-                                                    (off.dist - 0x1p-22) * (1.0 - db) /
-                                                    (db * double(p.searchSteps)) *
-                                                    (1.0 - 0x1p-20);
-                                                if (ExitBoundPrunes(ef, off.dist,
-                                                                    off.invD, db,
-                                                                    double(lp), dApex,
-                                                                    double(best), stepLo))
-                                                    continue;
-                                            }
-                                            consider(off.dx, off.dy, off.fdx, off.fdy, b);
-                                        }
-                                    }
-                                }
-                            }
-                        }
-                        seedOk[c] = found;
-                        seedDx[c] = argDx;
-                        seedDy[c] = argDy;
-                        store(i, j, c, best);
-                    }
-                }
-            }
-        });
-    return m;
+    out.m.kind = outKind;
+    out.m.width = hf.width;
+    out.m.height = hf.height;
+    out.m.channels = out.K;
+    out.m.values.assign(size_t(hf.width) * size_t(hf.height) * size_t(out.K), 0.0f);
+    if (brute)
+        BruteRelaxedMap(hf, p, g, out);
+    else
+        PrunedRelaxedMap(hf, p, g, dmin, exitField, out);
+    return std::move(out.m);
 }
 
 }  // namespace reliefsim::detail
