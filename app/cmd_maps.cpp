@@ -12,9 +12,9 @@
 #include "core/error.h"
 #include "core/memory.h"
 #include "core/output_set.h"
-#include "texture/cone_map.h"
-#include "texture/map_cache.h"
-#include "texture/mip_pyramid.h"
+#include "maps/cone_map.h"
+#include "maps/map_cache.h"
+#include "maps/mip_pyramid.h"
 
 namespace reliefsim {
 

@@ -1,5 +1,5 @@
 // Fuzz harness: the image loaders (texture/image_io.h LoadHeightMapFile,
-// texture/cone_map.h LoadExternalConeMap) on arbitrary file contents.
+// maps/cone_map.h LoadExternalConeMap) on arbitrary file contents.
 //
 // Input layout: byte 0 picks the file name's extension (kExtensions, by value modulo its
 // size; the last entry is no extension, so OpenImageIO probes every reader), byte 1 the
@@ -21,7 +21,7 @@
 #include <string>
 
 #include "core/error.h"
-#include "texture/cone_map.h"
+#include "maps/cone_map.h"
 #include "texture/image_io.h"
 
 namespace {

@@ -16,9 +16,9 @@
 
 #include "app/pipeline.h"
 #include "core/error.h"
+#include "maps/mip_pyramid.h"
 #include "tests/app/cli_util.h"
 #include "tests/common/test_files.h"
-#include "texture/mip_pyramid.h"
 #include "texture/procedural.h"
 
 using namespace reliefsim;

@@ -8,7 +8,7 @@
 #include <filesystem>
 
 #include "core/error.h"
-#include "texture/cone_map.h"
+#include "maps/cone_map.h"
 #include "texture/image_io.h"
 
 namespace reliefsim {

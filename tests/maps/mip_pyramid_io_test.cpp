@@ -12,9 +12,9 @@
 #include <string>
 
 #include "core/error.h"
+#include "maps/mip_pyramid.h"
 #include "tests/common/test_files.h"
 #include "texture/image_io.h"
-#include "texture/mip_pyramid.h"
 
 using namespace reliefsim;
 namespace fs = std::filesystem;

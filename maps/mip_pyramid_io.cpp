@@ -10,7 +10,7 @@
 
 #include "core/error.h"
 #include "core/output_set.h"
-#include "texture/mip_pyramid.h"
+#include "maps/mip_pyramid.h"
 
 namespace reliefsim {
 

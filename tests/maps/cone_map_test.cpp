@@ -1,6 +1,6 @@
 // Cone-map generators: fast == brute force bit for bit, conservativeness, encodings,
 // adaptive, safety pass, cache, mip pyramids, bad input.
-#include "texture/cone_map.h"
+#include "maps/cone_map.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -12,10 +12,10 @@
 #include <iostream>
 
 #include "core/error.h"
-#include "texture/cone_map_detail.h"
+#include "maps/cone_map_detail.h"
+#include "maps/map_cache.h"
+#include "maps/mip_pyramid.h"
 #include "texture/image_io.h"
-#include "texture/map_cache.h"
-#include "texture/mip_pyramid.h"
 #include "texture/procedural.h"
 #include "texture/sampler.h"
 

@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "core/error.h"
-#include "texture/cone_map.h"
-#include "texture/cone_map_detail.h"
+#include "maps/cone_map.h"
+#include "maps/cone_map_detail.h"
 
 namespace reliefsim {
 
@@ -142,7 +142,7 @@ ConeMap GenerateConeMapImpl(const HeightField& hf, ConeKind kind, const ConeMapP
         case ConeKind::MaxMip:
             throw Error("--kind " + std::string(ToString(kind)) +
                         ": a mip pyramid, not a cone map; use BuildMipPyramid "
-                        "(texture/mip_pyramid.h)");
+                        "(maps/mip_pyramid.h)");
         default:
             return SearchMap(hf, kind, p, mode);
     }

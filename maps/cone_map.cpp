@@ -1,6 +1,6 @@
 // Cone maps: names, geometry, offsets, encodings, the bilinear safety pass and
 // statistics.
-#include "texture/cone_map.h"
+#include "maps/cone_map.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -13,7 +13,7 @@
 #include <sstream>
 
 #include "core/error.h"
-#include "texture/cone_map_detail.h"
+#include "maps/cone_map_detail.h"
 
 namespace reliefsim {
 

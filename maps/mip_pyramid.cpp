@@ -1,5 +1,5 @@
 // Min/max mip pyramids: wrap-aware 2x2 reductions for any size.
-#include "texture/mip_pyramid.h"
+#include "maps/mip_pyramid.h"
 
 #include <algorithm>
 #include <string>

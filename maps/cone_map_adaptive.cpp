@@ -10,8 +10,8 @@
 #include <vector>
 
 #include "core/error.h"
-#include "texture/cone_map.h"
-#include "texture/cone_map_detail.h"
+#include "maps/cone_map.h"
+#include "maps/cone_map_detail.h"
 
 namespace reliefsim {
 

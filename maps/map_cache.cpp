@@ -1,5 +1,5 @@
 // Disk cache of generated maps: content-hash keys, verified entries, atomic writes.
-#include "texture/map_cache.h"
+#include "maps/map_cache.h"
 
 #include <cstring>
 #include <filesystem>

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "texture/cone_map.h"
+#include "maps/cone_map.h"
 #include "texture/procedural.h"
 
 namespace reliefsim {

@@ -6,7 +6,7 @@
 #include <optional>
 #include <string>
 
-#include "texture/cone_map.h"
+#include "maps/cone_map.h"
 
 namespace reliefsim {
 

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "core/error.h"
-#include "texture/cone_map.h"
+#include "maps/cone_map.h"
 
 namespace reliefsim::detail {
 
@@ -240,7 +240,7 @@ inline bool IsLimiting(const HeightField& hf, int bx, int by, int dx, int dy) {
 float RelaxedPairRatio(const HeightField& hf, int ti, int tj, int dx, int dy, int steps,
                        float apex);
 
-/// Listing 18-1/18-2 relaxed map (texture/cone_map_relaxed.cpp): outKind Relaxed
+/// Listing 18-1/18-2 relaxed map (maps/cone_map_relaxed.cpp): outKind Relaxed
 /// (ratios), ConeNormal (n_z of the ratio) or Stacked (p.stackedCount channels, apex
 /// StackedApex). brute = every pair, no pruning (the oracle); otherwise the exact pruned
 /// search, which uses the exit-field bound where its float argument holds (maps up to
