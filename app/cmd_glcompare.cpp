@@ -105,7 +105,7 @@ void PrintText(const GlCompareResult& r, const GlCompareArgs& a,
     const RecordComparison& c = r.comparison;
     std::printf("reliefsim glcompare: %s on %s at %dx%d, %s %s %s; %s\n",
                 s.method.c_str(), field.name.c_str(), s.width, s.height,
-                a.options.textureFormat.c_str(),
+                std::string(kTextureFormatNames.Name(s.sampler.precision)).c_str(),
                 std::string(ToString(s.sampler.filter)).c_str(),
                 std::string(ToString(s.sampler.wrap)).c_str(), r.renderer.c_str());
     std::printf("pixels %" PRIu64 " covered by both; coverage differs at %" PRIu64
@@ -272,8 +272,9 @@ std::string TraceCommand(const RenderOptions& o, int x, int y) {
     const RenderSettings& s = o.settings;
     std::ostringstream cmd;
     cmd << "reliefsim glcompare --map " << o.map.map;
-    if (o.map.channel != "auto") cmd << " --map-channel " << o.map.channel;
-    if (o.map.stores != "height") cmd << " --map-stores " << o.map.stores;
+    if (o.map.channel != Channel::Auto)
+        cmd << " --map-channel " << ToString(o.map.channel);
+    if (o.map.stores != Stores::Height) cmd << " --map-stores " << ToString(o.map.stores);
     cmd << " --method " << s.method;
     for (const auto& kv : s.set) cmd << " --set " << kv;
     cmd << " --size " << s.width << "x" << s.height << " --view-angle "
@@ -281,7 +282,8 @@ std::string TraceCommand(const RenderOptions& o, int x, int y) {
         << Number(s.distance) << " --fov " << Number(s.fovY) << " --depth-scale "
         << Number(s.depthScale) << " --tiling " << Number(s.tiling) << " --filter "
         << ToString(s.sampler.filter) << " --wrap " << ToString(s.sampler.wrap)
-        << " --texture-format " << o.textureFormat << " --trace-pixel " << x << "," << y;
+        << " --texture-format " << kTextureFormatNames.Name(s.sampler.precision)
+        << " --trace-pixel " << x << "," << y;
     return cmd.str();
 }
 
@@ -294,7 +296,7 @@ nlohmann::json GlCompareJson(const GlCompareResult& r, const RenderOptions& o,
     j["map"] = field.name;
     j["width"] = s.width;
     j["height"] = s.height;
-    j["texture_format"] = o.textureFormat;
+    j["texture_format"] = std::string(kTextureFormatNames.Name(s.sampler.precision));
     j["filter"] = std::string(ToString(s.sampler.filter));
     j["wrap"] = std::string(ToString(s.sampler.wrap));
     j["renderer"] = r.renderer;
@@ -343,9 +345,9 @@ void RegisterGlCompareCommand(CLI::App& root) {
                "--heatmap", a->heatmap,
                "difference heatmap PNG (differing fields per pixel); empty: none")
             ->capture_default_str();
-    cmd->add_option(
-        "--trace-pixel", a->tracePixel,
-        "X,Y (row 0 at the top): print both paths' fetches for one pixel instead");
+    cmd->add_option("--trace-pixel", a->tracePixel,
+                    "print both paths' fetches for pixel X,Y (row 0 at the top) instead")
+        ->type_name("X,Y");
     cmd->callback([a] { RunGlCompareCommand(*a); });
 }
 

@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "app/commands.h"
+#include "app/enum_option.h"
 #include "app/render_options.h"
 #include "core/error.h"
 #include "core/memory.h"
@@ -20,14 +21,24 @@ namespace reliefsim {
 
 namespace {
 
+/// --external-channel: a channel index of the external map, or -1 for all four.
+constexpr int kAllChannels = -1;
+constexpr auto kExternalChannelNames = MakeEnumNames<int>({
+    {"R", 0},
+    {"G", 1},
+    {"B", 2},
+    {"A", 3},
+    {"all", kAllChannels},
+});
+
 struct MapsOptions {
     MapOptions map;
-    std::string kind = "cone";
-    std::string encoding = "float";
+    ConeKind kind = ConeKind::Cone;
+    ConeEncoding encoding = ConeEncoding::Float;
     std::string out;
     std::string cacheDir;
     std::string external;
-    std::string externalChannel = "B";
+    int externalChannel = 2;  ///< B, where GPU Gems 3 keeps its cone ratios
     bool adaptive = false;
     bool safety = false;
     bool relaxed = false;
@@ -98,7 +109,7 @@ void CheckCombinations(const MapsOptions& o, ConeKind kind) {
             if (o.Given(opt))
                 refuse(opt,
                        "does not apply with --external (the map is read, not generated)");
-        const bool all = o.externalChannel == "all";
+        const bool all = o.externalChannel == kAllChannels;
         const bool oneChannel = kind == ConeKind::Cone || kind == ConeKind::Relaxed ||
                                 kind == ConeKind::RelaxedExact ||
                                 kind == ConeKind::ConeNormal;
@@ -109,7 +120,8 @@ void CheckCombinations(const MapsOptions& o, ConeKind kind) {
         if (oneChannel && all)
             refuse("--external-channel all", k + " has one channel; pick R, G, B or A");
         if (fourChannels && !all)
-            refuse("--external-channel " + o.externalChannel,
+            refuse("--external-channel " +
+                       std::string(kExternalChannelNames.Name(o.externalChannel)),
                    k + " has four channels; use --external-channel all (R, G, B, A)");
     }
 }
@@ -155,15 +167,9 @@ void PrintStats(const ConeMap& m, const ConeMapStats& s) {
 
 void Run(const MapsOptions& o) {
     // Validate everything before any work or output.
-    const auto kind = ParseConeKind(o.kind);
-    if (!kind)
-        throw Error("--kind \"" + o.kind + "\": unknown; must be one of " +
-                    ConeKindList());
-    const auto enc = ParseConeEncoding(o.encoding);
-    if (!enc)
-        throw Error("--encoding \"" + o.encoding + "\": unknown; must be one of " +
-                    ConeEncodingList());
-    const bool mipKind = *kind == ConeKind::MinMip || *kind == ConeKind::MaxMip;
+    const ConeKind kind = o.kind;
+    const ConeEncoding enc = o.encoding;
+    const bool mipKind = kind == ConeKind::MinMip || kind == ConeKind::MaxMip;
     if (!o.out.empty() && mipKind) {
         try {
             CheckMipPyramidPath(o.out);  // one MIP-mapped file: .exr only
@@ -180,21 +186,7 @@ void Run(const MapsOptions& o) {
         throw Error("--animate " + std::to_string(o.animate) +
                     ": expected 0..100000 frames");
     if (o.bins < 1 || o.bins > 4096) throw Error("--bins: expected 1..4096");
-    CheckCombinations(o, *kind);
-    int extChannel = 2;
-    if (o.externalChannel == "R")
-        extChannel = 0;
-    else if (o.externalChannel == "G")
-        extChannel = 1;
-    else if (o.externalChannel == "B")
-        extChannel = 2;
-    else if (o.externalChannel == "A")
-        extChannel = 3;
-    else if (o.externalChannel == "all")
-        extChannel = -1;
-    else
-        throw Error("--external-channel \"" + o.externalChannel +
-                    "\": must be R, G, B, A or all");
+    CheckCombinations(o, kind);
     ConeMapParams p;
     p.searchSteps = o.searchSteps;
     p.stackedCount = o.stackedCount;
@@ -204,7 +196,7 @@ void Run(const MapsOptions& o) {
     p.adaptiveLevels = o.levels;
     if (::isatty(2)) p.progress = ProgressBar;
     ValidateConeMapParams(p);
-    if (o.relaxed && *kind != ConeKind::ConeNormal && *kind != ConeKind::Stacked)
+    if (o.relaxed && kind != ConeKind::ConeNormal && kind != ConeKind::Stacked)
         throw Error(
             "--relaxed: applies to --kind cone-normal and stacked only (for plain "
             "relaxed "
@@ -222,16 +214,16 @@ void Run(const MapsOptions& o) {
                                "--out \"" + o.out + "\" (its statistics)");
     }
     if (!o.out.empty() && std::filesystem::path(o.out).extension() == ".png" &&
-        *kind != ConeKind::Acm8 && ChannelCount(*kind, p) > 4)
-        throw Error("--out \"" + o.out + "\": " + std::string(ToString(*kind)) + " has " +
-                    std::to_string(ChannelCount(*kind, p)) +
+        kind != ConeKind::Acm8 && ChannelCount(kind, p) > 4)
+        throw Error("--out \"" + o.out + "\": " + std::string(ToString(kind)) + " has " +
+                    std::to_string(ChannelCount(kind, p)) +
                     " channels, more than a PNG holds; use .exr");
 
     if (o.animate > 0) {
-        const ConeKind k = (*kind == ConeKind::Cone || *kind == ConeKind::Quad ||
-                            *kind == ConeKind::Acm8)
-                               ? *kind
-                               : ConeKind::Acm4;
+        const ConeKind k =
+            (kind == ConeKind::Cone || kind == ConeKind::Quad || kind == ConeKind::Acm8)
+                ? kind
+                : ConeKind::Acm4;
         const HeightField first = LoadMapFromOptions(o.map);
         const int W = first.width, H = first.height;
         // Buffers live across frames, as a renderer would keep them: after frame 0 (which
@@ -272,15 +264,16 @@ void Run(const MapsOptions& o) {
     // The generators keep a few float planes and search windows per texel (measured peak
     // RSS: relaxed ~370 bytes per texel above the base, other kinds less).
     RequireMemory((64ull << 20) + uint64_t(hf.width) * uint64_t(hf.height) *
-                                      (400 + 8 * uint64_t(ChannelCount(*kind, p))),
+                                      (400 + 8 * uint64_t(ChannelCount(kind, p))),
                   "--map " + hf.name + " (" + std::to_string(hf.width) + "x" +
-                      std::to_string(hf.height) + ", --kind " + o.kind + ")",
+                      std::to_string(hf.height) + ", --kind " +
+                      std::string(ToString(o.kind)) + ")",
                   "use a smaller map");
-    if (*kind == ConeKind::MinMip || *kind == ConeKind::MaxMip) {
+    if (kind == ConeKind::MinMip || kind == ConeKind::MaxMip) {
         // maxmip: max height = min depth; minmip: min height = max depth.
         const auto levels =
             BuildMipPyramid(hf.depth, hf.width, hf.height, 1,
-                            *kind == ConeKind::MaxMip ? MipReduce::Min : MipReduce::Max);
+                            kind == ConeKind::MaxMip ? MipReduce::Min : MipReduce::Max);
         for (size_t l = 0; l < levels.size(); ++l)
             std::printf("level %zu: %dx%d\n", l, levels[l].width, levels[l].height);
         if (!o.out.empty()) {
@@ -292,7 +285,7 @@ void Run(const MapsOptions& o) {
                 throw Error("--out " + std::string(e.what()));
             }
             OutputSet outputs("--out \"" + o.out + "\"");
-            WriteMipPyramidFile(o.out, levels, ToString(*kind), &outputs);
+            WriteMipPyramidFile(o.out, levels, ToString(kind), &outputs);
             outputs.Commit();
             std::printf("wrote %s (%zu MIP levels)\n", o.out.c_str(), levels.size());
         }
@@ -302,18 +295,18 @@ void Run(const MapsOptions& o) {
     ConeMap m;
     Status("generating");
     if (!o.external.empty()) {
-        m = LoadExternalConeMap(o.external, *kind, extChannel, hf.width, hf.height);
+        m = LoadExternalConeMap(o.external, kind, o.externalChannel, hf.width, hf.height);
     } else if (!o.cacheDir.empty()) {
         bool hit = false;
         m = MapCache(o.cacheDir)
                 .GetOrCreate(
-                    hf, *kind, p, [&] { return GenerateConeMap(hf, *kind, p); }, &hit);
+                    hf, kind, p, [&] { return GenerateConeMap(hf, kind, p); }, &hit);
         std::printf("cache: %s\n", hit ? "hit" : "miss (generated and stored)");
     } else {
-        m = GenerateConeMap(hf, *kind, p);
+        m = GenerateConeMap(hf, kind, p);
     }
     if (o.safety) m = BilinearSafetyPass(m);
-    const ConeMap stored = QuantizeConeMap(m, *enc);
+    const ConeMap stored = QuantizeConeMap(m, enc);
     StatusDone();
     const ConeMapStats s = ComputeConeMapStats(stored, o.bins);
     PrintStats(stored, s);
@@ -323,8 +316,8 @@ void Run(const MapsOptions& o) {
         OutputSet outputs("--out \"" + o.out + "\"");
         outputs.Add(o.out);
         outputs.Add(StatsPath(o.out));  // both destinations checked before any writing
-        WriteConeMap(o.out, m, *enc, &outputs);
-        outputs.Write(StatsPath(o.out), ConeMapStatsJson(stored, s, *enc) + "\n");
+        WriteConeMap(o.out, m, enc, &outputs);
+        outputs.Write(StatsPath(o.out), ConeMapStatsJson(stored, s, enc) + "\n");
         outputs.Commit();
         std::printf("wrote %s and %s\n", o.out.c_str(), StatsPath(o.out).c_str());
     }
@@ -338,13 +331,10 @@ void RegisterMapsCommand(CLI::App& root) {
         "maps",
         "generate a derived map (cone family, mip pyramids), print and write statistics");
     AddMapOptions(cmd, o->map);
-    cmd->add_option(
-           "--kind", o->kind,
-           "cone|relaxed|relaxed-exact|quad|acm4|acm8|cone-normal|stacked|minmip|maxmip")
-        ->capture_default_str();
-    cmd->add_option("--encoding", o->encoding,
-                    "float|u8|u8sqrt|u16 (quantisation rounds toward smaller ratios)")
-        ->capture_default_str();
+    AddEnumOption(cmd, "--kind", o->kind, kConeKindNames,
+                  "the derived map (docs/cone_maps.md)");
+    AddEnumOption(cmd, "--encoding", o->encoding, kConeEncodingNames,
+                  "how ratios are stored (quantisation rounds toward smaller ratios)");
     cmd->add_flag(
         "--adaptive", o->adaptive,
         "adaptive hierarchical preprocessing (000 Algorithm 1; cone, quad, acm4, acm8)");
@@ -369,9 +359,9 @@ void RegisterMapsCommand(CLI::App& root) {
     cmd->add_option("--external", o->external,
                     "use a cone map made elsewhere (e.g. GPU Gems 3 *_cone.tga) instead "
                     "of generating");
-    cmd->add_option("--external-channel", o->externalChannel,
-                    "R|G|B|A|all (GPU Gems 3: B)")
-        ->capture_default_str();
+    AddEnumOption(cmd, "--external-channel", o->externalChannel, kExternalChannelNames,
+                  "the channel of --external holding the ratios (GPU Gems 3 maps: B), "
+                  "or all four");
     cmd->add_option(
         "--animate", o->animate,
         "N frames of the dynamic sinusoid map at the --map size, regenerated and "

@@ -20,7 +20,9 @@ void RegisterTraceCommand(CLI::App& root) {
         "run one pixel's kernel of the scene `render` would draw and print every fetch "
         "(uv, ray depth, sampled depth) and the result");
     AddRenderOptions(cmd, a->options, /*withHeatmapScales=*/false);
-    cmd->add_option("--pixel", a->pixel, "pixel X,Y (row 0 at the top)")->required();
+    cmd->add_option("--pixel", a->pixel, "pixel X,Y (row 0 at the top)")
+        ->type_name("X,Y")
+        ->required();
     cmd->callback([a] {
         ResolveRenderSettings(a->options);
         const auto [x, y] = ParsePixel("--pixel", a->pixel, a->options.settings.width,

@@ -5,14 +5,15 @@
 #include <string>
 
 #include "texture/height_field.h"
+#include "texture/image_io.h"
 
 namespace reliefsim {
 
 /// The height-map options shared by every command that reads a map.
 struct MapOptions {
     std::string map = "builtin:shapes";  ///< file path or builtin:NAME[:SIZE]
-    std::string channel = "auto";        ///< R|G|B|A|auto
-    std::string stores = "height";       ///< height|depth
+    Channel channel = Channel::Auto;
+    Stores stores = Stores::Height;
     /// Set by AddMapOptions: tells whether --map-channel / --map-stores were given (they
     /// do not apply to a builtin map, and are refused there).
     const CLI::Option* channelOption = nullptr;

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 
+#include "app/enum_option.h"
 #include "core/error.h"
 #include "core/output_set.h"
 #include "core/parse.h"
@@ -40,6 +41,13 @@ void ParseScale(const std::string& opt, const std::string& text, float& lo, floa
     hi = *b;
 }
 
+/// "0:64": a heatmap scale as --iterations-scale takes it.
+std::string ScaleText(float lo, float hi) {
+    char text[64];
+    std::snprintf(text, sizeof text, "%g:%g", double(lo), double(hi));
+    return text;
+}
+
 }  // namespace
 
 void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
@@ -64,15 +72,14 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
         ->capture_default_str();
     cmd->add_option("--tiling", o.settings.tiling, "texture repeats across the plane")
         ->capture_default_str();
-    cmd->add_option("--filter", o.filter, "height sampler filter: nearest|bilinear|min4")
-        ->capture_default_str();
-    cmd->add_option("--wrap", o.wrap, "height sampler wrap: repeat|clamp")
-        ->capture_default_str();
-    cmd->add_option(
-           "--texture-format", o.textureFormat,
-           "height texture: r32f (float) or r8 (8-bit unorm, filtered in llvmpipe's "
-           "8.8 fixed point; the map is quantised)")
-        ->capture_default_str();
+    AddEnumOption(cmd, "--filter", o.settings.sampler.filter, kFilterNames,
+                  "height sampler filter");
+    AddEnumOption(cmd, "--wrap", o.settings.sampler.wrap, kWrapModeNames,
+                  "height sampler wrap");
+    AddEnumOption(cmd, "--texture-format", o.settings.sampler.precision,
+                  kTextureFormatNames,
+                  "height texture: r32f (float) or r8 (8-bit unorm, filtered in "
+                  "llvmpipe's 8.8 fixed point; the map is quantised)");
     cmd->add_option("--threads", o.settings.threads, "worker threads (0 = all cores)")
         ->capture_default_str()
         ->check(CLI::Range(0, kMaxThreads));
@@ -83,29 +90,20 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
         ->capture_default_str()
         ->check(CLI::IsMember({0, 1, 4, 8, 16}));
     if (!withHeatmapScales) return;
+    const RenderSettings& s = o.settings;
     cmd->add_option("--iterations-scale", o.iterScale,
-                    "fixed MIN:MAX of the iterations heatmap (default 0:64)");
+                    "fixed MIN:MAX of the iterations heatmap")
+        ->type_name("MIN:MAX")
+        ->default_str(ScaleText(s.iterScaleMin, s.iterScaleMax));
     cmd->add_option("--fetches-scale", o.fetchScale,
-                    "fixed MIN:MAX of the fetches heatmap (default 0:64)");
+                    "fixed MIN:MAX of the fetches heatmap")
+        ->type_name("MIN:MAX")
+        ->default_str(ScaleText(s.fetchScaleMin, s.fetchScaleMax));
 }
 
 void ResolveRenderSettings(RenderOptions& o) {
     RenderSettings& s = o.settings;
     ParseSize(o.size, s.width, s.height);
-    auto filter = ParseFilter(o.filter);
-    if (!filter)
-        throw Error("--filter \"" + o.filter + "\": must be nearest, bilinear or min4");
-    auto wrap = ParseWrapMode(o.wrap);
-    if (!wrap) throw Error("--wrap \"" + o.wrap + "\": must be repeat or clamp");
-    s.sampler.filter = *filter;
-    s.sampler.wrap = *wrap;
-    if (o.textureFormat == "r32f") {
-        s.sampler.precision = Precision::Float;
-    } else if (o.textureFormat == "r8") {
-        s.sampler.precision = Precision::Llvmpipe8;
-    } else {
-        throw Error("--texture-format \"" + o.textureFormat + "\": must be r32f or r8");
-    }
     ParseScale("--iterations-scale", o.iterScale, s.iterScaleMin, s.iterScaleMax);
     ParseScale("--fetches-scale", o.fetchScale, s.fetchScaleMin, s.fetchScaleMax);
     ValidateSettings(s);

@@ -12,15 +12,19 @@
 
 namespace reliefsim {
 
-/// The render options as parsed text and values; Resolve() turns them into settings.
+/// "WxH", as --size takes it.
+inline std::string SizeText(int width, int height) {
+    return std::to_string(width) + "x" + std::to_string(height);
+}
+
+/// The render options: values bound straight into settings (the sampler's enums among
+/// them), and the text of the options that ResolveRenderSettings() parses. The defaults
+/// are RenderSettings' own.
 struct RenderOptions {
     MapOptions map;
     RenderSettings settings;
-    std::string size = "512x512";
-    std::string filter = "bilinear", wrap = "repeat";
-    std::string textureFormat =
-        "r32f";  ///< r32f | r8 (8-bit unorm, llvmpipe fixed point)
-    std::string iterScale, fetchScale;
+    std::string size = SizeText(settings.width, settings.height);  ///< WxH
+    std::string iterScale, fetchScale;  ///< MIN:MAX; empty: the settings' scale
 };
 
 /// Adds render's scene options (map, method, set, size, camera, sampler, texture format,

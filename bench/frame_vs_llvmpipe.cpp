@@ -45,7 +45,6 @@ int Run(int argc, char** argv) {
     CLI::App app{
         "frame_vs_llvmpipe: ms/frame of the simulator and of llvmpipe for one scene"};
     RenderOptions o;
-    o.size = "512x512";
     int frames = 7;
     AddRenderOptions(&app, o);
     app.add_option("--frames", frames, "timed frames per path (median; >= 5)")
@@ -89,7 +88,8 @@ int Run(int argc, char** argv) {
 
     const double sim = Median(simMs), ref = Median(glMs);
     std::printf("scene: %s on %s at %dx%d, %s %s %s, threads %d\n", s.method.c_str(),
-                field.name.c_str(), s.width, s.height, o.textureFormat.c_str(),
+                field.name.c_str(), s.width, s.height,
+                std::string(kTextureFormatNames.Name(s.sampler.precision)).c_str(),
                 std::string(ToString(s.sampler.filter)).c_str(),
                 std::string(ToString(s.sampler.wrap)).c_str(), threads);
     std::printf("cpu: %s; llvmpipe: %s\n", CpuModel().c_str(), gl.Renderer().c_str());

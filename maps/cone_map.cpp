@@ -17,59 +17,6 @@
 
 namespace reliefsim {
 
-namespace {
-constexpr std::array<std::pair<ConeKind, std::string_view>, 10> kKinds{{
-    {ConeKind::Cone, "cone"},
-    {ConeKind::Relaxed, "relaxed"},
-    {ConeKind::RelaxedExact, "relaxed-exact"},
-    {ConeKind::Quad, "quad"},
-    {ConeKind::Acm4, "acm4"},
-    {ConeKind::Acm8, "acm8"},
-    {ConeKind::ConeNormal, "cone-normal"},
-    {ConeKind::Stacked, "stacked"},
-    {ConeKind::MinMip, "minmip"},
-    {ConeKind::MaxMip, "maxmip"},
-}};
-constexpr std::array<std::pair<ConeEncoding, std::string_view>, 4> kEncodings{{
-    {ConeEncoding::Float, "float"},
-    {ConeEncoding::U8, "u8"},
-    {ConeEncoding::U8Sqrt, "u8sqrt"},
-    {ConeEncoding::U16, "u16"},
-}};
-}  // namespace
-
-std::string_view ToString(ConeKind k) {
-    for (auto& [v, n] : kKinds)
-        if (v == k) return n;
-    return "?";
-}
-std::string_view ToString(ConeEncoding e) {
-    for (auto& [v, n] : kEncodings)
-        if (v == e) return n;
-    return "?";
-}
-std::optional<ConeKind> ParseConeKind(std::string_view s) {
-    for (auto& [v, n] : kKinds)
-        if (n == s) return v;
-    return std::nullopt;
-}
-std::optional<ConeEncoding> ParseConeEncoding(std::string_view s) {
-    for (auto& [v, n] : kEncodings)
-        if (n == s) return v;
-    return std::nullopt;
-}
-std::string ConeKindList() {
-    std::string r;
-    for (auto& [v, n] : kKinds) r += (r.empty() ? "\"" : ", \"") + std::string(n) + "\"";
-    return r;
-}
-std::string ConeEncodingList() {
-    std::string r;
-    for (auto& [v, n] : kEncodings)
-        r += (r.empty() ? "\"" : ", \"") + std::string(n) + "\"";
-    return r;
-}
-
 void ValidateConeMapParams(const ConeMapParams& p) {
     if (p.searchSteps < 1 || p.searchSteps > 4096)
         throw Error("--search-steps " + std::to_string(p.searchSteps) +

@@ -10,6 +10,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/enum_names.h"
 #include "texture/height_field.h"
 
 namespace reliefsim {
@@ -47,13 +48,37 @@ enum class ConeEncoding {
     U16,     ///< ratio clamped to [0,1], code = floor(65535 r); decode code/65535
 };
 
-std::string_view ToString(ConeKind k);
-std::string_view ToString(ConeEncoding e);
-std::optional<ConeKind> ParseConeKind(std::string_view s);
-std::optional<ConeEncoding> ParseConeEncoding(std::string_view s);
-/// "cone", "relaxed", ... comma separated, for error messages.
-std::string ConeKindList();
-std::string ConeEncodingList();
+/// The names of the kinds and encodings (--kind, --encoding, cache keys, statistics).
+inline constexpr auto kConeKindNames = MakeEnumNames<ConeKind>({
+    {"cone", ConeKind::Cone},
+    {"relaxed", ConeKind::Relaxed},
+    {"relaxed-exact", ConeKind::RelaxedExact},
+    {"quad", ConeKind::Quad},
+    {"acm4", ConeKind::Acm4},
+    {"acm8", ConeKind::Acm8},
+    {"cone-normal", ConeKind::ConeNormal},
+    {"stacked", ConeKind::Stacked},
+    {"minmip", ConeKind::MinMip},
+    {"maxmip", ConeKind::MaxMip},
+});
+inline constexpr auto kConeEncodingNames = MakeEnumNames<ConeEncoding>({
+    {"float", ConeEncoding::Float},
+    {"u8", ConeEncoding::U8},
+    {"u8sqrt", ConeEncoding::U8Sqrt},
+    {"u16", ConeEncoding::U16},
+});
+
+inline std::string_view ToString(ConeKind k) { return kConeKindNames.Name(k); }
+inline std::string_view ToString(ConeEncoding e) { return kConeEncodingNames.Name(e); }
+inline std::optional<ConeKind> ParseConeKind(std::string_view s) {
+    return kConeKindNames.Parse(s);
+}
+inline std::optional<ConeEncoding> ParseConeEncoding(std::string_view s) {
+    return kConeEncodingNames.Parse(s);
+}
+/// The names quoted and comma separated ("cone", "relaxed", ...), for messages.
+inline std::string ConeKindList() { return kConeKindNames.QuotedList(); }
+inline std::string ConeEncodingList() { return kConeEncodingNames.QuotedList(); }
 
 /// Ratio stored where no texel of the surface lies above the apex (an unbounded cone).
 /// Any value is conservative there; 1024 spans the texture a thousand times over.

@@ -28,21 +28,6 @@ namespace reliefsim {
 
 namespace OIIO = OIIO_NAMESPACE;
 
-std::optional<Channel> ParseChannel(std::string_view s) {
-    if (s == "R" || s == "r") return Channel::R;
-    if (s == "G" || s == "g") return Channel::G;
-    if (s == "B" || s == "b") return Channel::B;
-    if (s == "A" || s == "a") return Channel::A;
-    if (s == "auto") return Channel::Auto;
-    return std::nullopt;
-}
-
-std::optional<Stores> ParseStores(std::string_view s) {
-    if (s == "height") return Stores::Height;
-    if (s == "depth") return Stores::Depth;
-    return std::nullopt;
-}
-
 namespace {
 
 /// Formats this tool reads height and cone maps from (OpenImageIO plugin names). Anything

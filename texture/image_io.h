@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/enum_names.h"
 #include "texture/height_field.h"
 
 namespace reliefsim {
@@ -19,8 +20,29 @@ class OutputSet;
 enum class Channel { Auto, R, G, B, A };
 enum class Stores { Height, Depth };
 
-std::optional<Channel> ParseChannel(std::string_view s);
-std::optional<Stores> ParseStores(std::string_view s);
+/// --map-channel's names; letters match in either case ("r" is R).
+inline constexpr auto kChannelNames = MakeEnumNames<Channel>(
+    {
+        {"R", Channel::R},
+        {"G", Channel::G},
+        {"B", Channel::B},
+        {"A", Channel::A},
+        {"auto", Channel::Auto},
+    },
+    /*ignoreCase=*/true);
+inline constexpr auto kStoresNames = MakeEnumNames<Stores>({
+    {"height", Stores::Height},
+    {"depth", Stores::Depth},
+});
+
+inline std::optional<Channel> ParseChannel(std::string_view s) {
+    return kChannelNames.Parse(s);
+}
+inline std::optional<Stores> ParseStores(std::string_view s) {
+    return kStoresNames.Parse(s);
+}
+inline std::string_view ToString(Channel c) { return kChannelNames.Name(c); }
+inline std::string_view ToString(Stores s) { return kStoresNames.Name(s); }
 
 /// How an image file becomes a HeightField.
 struct MapLoadOptions {

@@ -8,6 +8,7 @@
 #include <optional>
 #include <string_view>
 
+#include "core/enum_names.h"
 #include "core/error.h"
 #include "texture/height_field.h"
 
@@ -32,12 +33,40 @@ enum class Precision {
                 ///< precision)
 };
 
-std::string_view ToString(Filter f);
-std::string_view ToString(WrapMode w);
-std::string_view ToString(Precision p);
-std::optional<Filter> ParseFilter(std::string_view s);
-std::optional<WrapMode> ParseWrapMode(std::string_view s);
-std::optional<Precision> ParsePrecision(std::string_view s);  ///< float|llvmpipe8|gpu8
+/// The names of the values (the command line's --filter, --wrap; reports).
+inline constexpr auto kFilterNames = MakeEnumNames<Filter>({
+    {"nearest", Filter::Nearest},
+    {"bilinear", Filter::Bilinear},
+    {"min4", Filter::Min4},
+});
+inline constexpr auto kWrapModeNames = MakeEnumNames<WrapMode>({
+    {"repeat", WrapMode::Repeat},
+    {"clamp", WrapMode::Clamp},
+});
+inline constexpr auto kPrecisionNames = MakeEnumNames<Precision>({
+    {"float", Precision::Float},
+    {"llvmpipe8", Precision::Llvmpipe8},
+    {"gpu8", Precision::Gpu8},
+});
+/// The height texture formats (--texture-format), each named by the precision it is
+/// filtered with; gpu8 has no texture format of its own.
+inline constexpr auto kTextureFormatNames = MakeEnumNames<Precision>({
+    {"r32f", Precision::Float},
+    {"r8", Precision::Llvmpipe8},
+});
+
+inline std::string_view ToString(Filter f) { return kFilterNames.Name(f); }
+inline std::string_view ToString(WrapMode w) { return kWrapModeNames.Name(w); }
+inline std::string_view ToString(Precision p) { return kPrecisionNames.Name(p); }
+inline std::optional<Filter> ParseFilter(std::string_view s) {
+    return kFilterNames.Parse(s);
+}
+inline std::optional<WrapMode> ParseWrapMode(std::string_view s) {
+    return kWrapModeNames.Parse(s);
+}
+inline std::optional<Precision> ParsePrecision(std::string_view s) {
+    return kPrecisionNames.Parse(s);
+}
 
 /// How a texture is sampled. Defaults: bilinear, repeat, float arithmetic (DESIGN.md
 /// conventions).

@@ -253,7 +253,7 @@ TEST(BadInput, MapOptionsThatDoNotApplyAreRefused) {
     ExpectRenderFailure("--map builtin:shapes --map-channel A", {"--map-channel"});
     ExpectRenderFailure("--map builtin:shapes --map-stores depth", {"--map-stores"});
     ExpectRenderFailure("--map " + Q(d / "g.png") + " --map-channel X",
-                        {"--map-channel"});
+                        {"--map-channel: \"X\" is unknown", "\"A\", \"auto\""});
     ExpectRenderFailure("--map builtin:nope", {"nope", "shapes"});
     ExpectRenderFailure("--map builtin:shapes:0", {"builtin:shapes:0"});
     ExpectRenderFailure("--map builtin:shapes:99999999999",
@@ -323,9 +323,12 @@ TEST(BadInput, NumericOptionsOutOfRangeAreRefused) {
     ExpectRenderFailure("--tiling 0", {"--tiling"});
     ExpectRenderFailure("--distance -1", {"--distance"});
     ExpectRenderFailure("--azimuth inf", {"--azimuth"});
-    ExpectRenderFailure("--filter bicubic", {"--filter", "bicubic"});
-    ExpectRenderFailure("--wrap mirror", {"--wrap", "mirror"});
-    ExpectRenderFailure("--texture-format r16", {"--texture-format", "r16"});
+    ExpectRenderFailure("--filter bicubic", {"--filter: \"bicubic\" is unknown",
+                                             "\"nearest\", \"bilinear\", \"min4\""});
+    ExpectRenderFailure("--wrap mirror",
+                        {"--wrap: \"mirror\" is unknown", "\"repeat\", \"clamp\""});
+    ExpectRenderFailure("--texture-format r16",
+                        {"--texture-format: \"r16\" is unknown", "\"r32f\", \"r8\""});
     ExpectRenderFailure("--method frob", {"--method", "frob", "relief"});
 }
 
@@ -363,8 +366,9 @@ TEST(BadInput, MapsOptionsThatDoNotApplyAreRefused) {
         {"--kind cone --external x.png --external-channel all", "--external-channel"},
         {"--kind cone --external x.png --cache-dir c", "--cache-dir"},
         {"--kind relaxed --relaxed", "--relaxed"},
-        {"--kind frob", "--kind"},
-        {"--encoding u12", "--encoding"},
+        {"--kind frob", "--kind: \"frob\""},
+        {"--encoding u12", "--encoding: \"u12\""},
+        {"--external-channel X", "--external-channel: \"X\""},
         {"--search-steps 0 --kind relaxed", "--search-steps"},
         {"--search-steps 99999999999 --kind relaxed", "--search-steps"},
         {"--animate -1", "--animate"},

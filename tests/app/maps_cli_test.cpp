@@ -135,11 +135,13 @@ TEST(MapsCli, AnimateReportsPerFrameTimes) {
 }
 
 TEST(MapsCli, UnknownKind) {
-    ExpectCleanFailure("--map builtin:shapes:16 --kind cones", "--kind \"cones\"");
+    ExpectCleanFailure("--map builtin:shapes:16 --kind cones",
+                       "--kind: \"cones\" is unknown");
 }
 
 TEST(MapsCli, UnknownEncoding) {
-    ExpectCleanFailure("--map builtin:shapes:16 --encoding u7", "--encoding \"u7\"");
+    ExpectCleanFailure("--map builtin:shapes:16 --encoding u7",
+                       "--encoding: \"u7\" is unknown");
 }
 
 TEST(MapsCli, BadOutputExtension) {

@@ -253,7 +253,7 @@ TEST(GlCompare, TraceCommandReproducesTheScene) {
     o.settings.method = "secant";
     o.settings.set = {"refine_steps=4"};
     o.size = "64x32";
-    o.textureFormat = "r8";
+    o.settings.sampler.precision = Precision::Llvmpipe8;
     ResolveRenderSettings(o);
     const std::string cmd = TraceCommand(o, 3, 4);
     for (const char* part :
