@@ -43,7 +43,7 @@ struct GlCompareArgs {
     const CLI::Option* heatmapOption = nullptr;
 };
 
-void PrintTrace(const GlCompareArgs& a, const HeightField& field, int x, int y) {
+void PrintTrace(const GlCompareArgs& a, const DepthField& field, int x, int y) {
     const RenderSettings& s = a.options.settings;
     if (x < 0 || y < 0 || x >= s.width || y >= s.height)
         throw Error("--trace-pixel " + a.tracePixel + ": outside the " +
@@ -100,7 +100,7 @@ void PrintTrace(const GlCompareArgs& a, const HeightField& field, int x, int y) 
 }
 
 void PrintText(const GlCompareResult& r, const GlCompareArgs& a,
-               const HeightField& field) {
+               const DepthField& field) {
     const RenderSettings& s = a.options.settings;
     const RecordComparison& c = r.comparison;
     std::printf("reliefsim glcompare: %s on %s at %dx%d, %s %s %s; %s\n",
@@ -168,7 +168,7 @@ void RunGlCompareCommand(GlCompareArgs& a) {
     }
     if (a.tracePixel.empty())
         RequireFrameMemory(s.width, s.height, kGlCompareBytesPerPixel);
-    HeightField field = LoadRenderMap(a.options);
+    DepthField field = LoadRenderMap(a.options);
     if (!a.tracePixel.empty()) {
         const auto [x, y] = pixel;
         PrintTrace(a, field, x, y);
@@ -216,7 +216,7 @@ std::vector<int16_t> SceneTriangles(const RenderSettings& s) {
                             camera, s.width, s.height);
 }
 
-GlCompareResult RunGlCompare(const HeightField& field, const RenderSettings& s,
+GlCompareResult RunGlCompare(const DepthField& field, const RenderSettings& s,
                              GlReference& gl) {
     GlCompareResult r;
     r.cpu = Render(field, s);
@@ -288,7 +288,7 @@ std::string TraceCommand(const RenderOptions& o, int x, int y) {
 }
 
 nlohmann::json GlCompareJson(const GlCompareResult& r, const RenderOptions& o,
-                             const HeightField& field) {
+                             const DepthField& field) {
     const RecordComparison& c = r.comparison;
     const RenderSettings& s = o.settings;
     nlohmann::json j;

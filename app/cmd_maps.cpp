@@ -224,13 +224,13 @@ void Run(const MapsOptions& o) {
             (kind == ConeKind::Cone || kind == ConeKind::Quad || kind == ConeKind::Acm8)
                 ? kind
                 : ConeKind::Acm4;
-        const HeightField first = LoadMapFromOptions(o.map);
+        const DepthField first = LoadMapFromOptions(o.map);
         const int W = first.width, H = first.height;
         // Buffers live across frames, as a renderer would keep them: after frame 0 (which
         // allocates, page-faults the buffers in and starts the TBB workers) a frame
         // allocates nothing, so the steady-state times are the preprocessing cost itself.
         AdaptiveWorkspace ws;
-        HeightField hf;
+        DepthField hf;
         ConeMap m;
         double sum = 0, worst = 0, first0 = 0;
         for (int f = 0; f < o.animate; ++f) {
@@ -260,7 +260,7 @@ void Run(const MapsOptions& o) {
         return;
     }
 
-    const HeightField hf = LoadMapFromOptions(o.map);
+    const DepthField hf = LoadMapFromOptions(o.map);
     // The generators keep a few float planes and search windows per texel (measured peak
     // RSS: relaxed ~370 bytes per texel above the base, other kinds less).
     RequireMemory((64ull << 20) + uint64_t(hf.width) * uint64_t(hf.height) *

@@ -21,7 +21,7 @@ void RunRender(RenderArgs& a) {
     const RenderSettings& s = a.options.settings;
     CheckOutputDirectory("--out", a.out);
     RequireFrameMemory(s.width, s.height);
-    HeightField field = LoadRenderMap(a.options);
+    DepthField field = LoadRenderMap(a.options);
     RequireFrameMemory(s.width, s.height);  // what is left once the map is in memory
     RenderOutput out = Render(field, s);
     WriteRenderOutputs(a.out, out, s, field);

@@ -27,7 +27,7 @@ void RegisterTraceCommand(CLI::App& root) {
         ResolveRenderSettings(a->options);
         const auto [x, y] = ParsePixel("--pixel", a->pixel, a->options.settings.width,
                                        a->options.settings.height);
-        HeightField field = LoadRenderMap(a->options);
+        DepthField field = LoadRenderMap(a->options);
         std::cout << FormatTrace(TracePixel(field, a->options.settings, x, y));
     });
 }

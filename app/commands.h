@@ -4,7 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <string>
 
-#include "texture/height_field.h"
+#include "texture/depth_field.h"
 #include "texture/image_io.h"
 
 namespace reliefsim {
@@ -24,7 +24,7 @@ struct MapOptions {
 void AddMapOptions(CLI::App* cmd, MapOptions& options);
 
 /// Loads the map the options name; throws Error on any problem.
-HeightField LoadMapFromOptions(const MapOptions& options);
+DepthField LoadMapFromOptions(const MapOptions& options);
 
 // Each Register*Command adds one subcommand whose callback does the work and throws
 // reliefsim::Error on bad input (main() prints it and exits non-zero).

@@ -30,13 +30,13 @@ struct GlCompareResult {
 };
 
 /// Renders with both paths and compares.
-GlCompareResult RunGlCompare(const HeightField& field, const RenderSettings& settings,
+GlCompareResult RunGlCompare(const DepthField& field, const RenderSettings& settings,
                              GlReference& gl);
 
 /// The JSON report: pixels, identical{hit_uv, hit_depth, iterations, fetches}, max_diff,
 /// coverage, first_differences (with trace commands), lane_cost.
 nlohmann::json GlCompareJson(const GlCompareResult& r, const RenderOptions& options,
-                             const HeightField& field);
+                             const DepthField& field);
 
 /// The command line that re-runs glcompare for one pixel with a two-path fetch trace.
 std::string TraceCommand(const RenderOptions& options, int x, int y);

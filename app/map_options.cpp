@@ -20,7 +20,7 @@ void AddMapOptions(CLI::App* cmd, MapOptions& o) {
                                    "what the file stores: height (white = top) or depth");
 }
 
-HeightField LoadMapFromOptions(const MapOptions& o) {
+DepthField LoadMapFromOptions(const MapOptions& o) {
     const bool builtin = o.map.rfind("builtin:", 0) == 0;
     if (builtin && o.channelOption && o.channelOption->count() > 0)
         throw Error("--map-channel " + std::string(ToString(o.channel)) +

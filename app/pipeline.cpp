@@ -247,9 +247,9 @@ ViewUniforms MakeViewUniforms(const RenderSettings& s) {
     return u;
 }
 
-RenderOutput Render(const HeightField& field, const RenderSettings& s) {
+RenderOutput Render(const DepthField& field, const RenderSettings& s) {
     ValidateSettings(s);
-    ValidateHeightField(field);
+    ValidateDepthField(field);
     RenderOutput out;
     const Kernel kernel = SettingsKernel(s);
     out.params = kernel.values;
@@ -295,7 +295,7 @@ RenderOutput Render(const HeightField& field, const RenderSettings& s) {
 }
 
 nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
-                           const HeightField& field) {
+                           const DepthField& field) {
     const FrameSummary& m = out.summary;
     nlohmann::json params = nlohmann::json::object();
     for (const auto& [k, v] : out.params) {
@@ -354,7 +354,7 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
 }
 
 void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
-                        const RenderSettings& s, const HeightField& field) {
+                        const RenderSettings& s, const DepthField& field) {
     if (outDir.empty()) throw Error("--out: empty; give a directory");
     const fs::path dir(outDir);
     std::error_code ec;

@@ -11,7 +11,7 @@
 #include "kernels/view_ray.h"
 #include "metrics/summary.h"
 #include "raster/camera.h"
-#include "texture/height_field.h"
+#include "texture/depth_field.h"
 #include "texture/sampler.h"
 
 namespace reliefsim {
@@ -96,12 +96,12 @@ Camera SceneCamera(const RenderSettings& settings);
 ViewUniforms MakeViewUniforms(const RenderSettings& settings);
 
 /// Renders one frame of the textured plane with the settings' method.
-RenderOutput Render(const HeightField& field, const RenderSettings& settings);
+RenderOutput Render(const DepthField& field, const RenderSettings& settings);
 
 /// metrics.json content: the contract keys plus extras; timing fields only under
 /// "timing".
 nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& settings,
-                           const HeightField& field);
+                           const DepthField& field);
 
 /// Writes color.png, iterations.png, fetches.png, record.exr and metrics.json into
 /// outDir, all or nothing (core/output_set.h): every destination is checked first (a
@@ -112,6 +112,6 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& settin
 /// are created as mkdir does (mode 0777 & ~umask). Every file but metrics.json's "timing"
 /// is byte-identical for equal inputs and any thread count.
 void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
-                        const RenderSettings& settings, const HeightField& field);
+                        const RenderSettings& settings, const DepthField& field);
 
 }  // namespace reliefsim

@@ -153,8 +153,8 @@ void CheckOutputDirectory(const std::string& option, const std::string& dir,
         CheckOutputDestination((fs::path(dir) / name).string(), option);
 }
 
-HeightField LoadRenderMap(const RenderOptions& o) {
-    HeightField field = LoadMapFromOptions(o.map);
+DepthField LoadRenderMap(const RenderOptions& o) {
+    DepthField field = LoadMapFromOptions(o.map);
     if (o.settings.sampler.precision == Precision::Llvmpipe8 &&
         field.depth8.size() != field.depth.size())
         field = QuantizeToUnorm8(field);

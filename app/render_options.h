@@ -64,6 +64,6 @@ void CheckOutputDirectory(const std::string& option, const std::string& dir,
 
 /// Loads the map; with --texture-format r8 quantises it to 8 bits (keeping depth8) unless
 /// it already came from 8-bit data.
-HeightField LoadRenderMap(const RenderOptions& options);
+DepthField LoadRenderMap(const RenderOptions& options);
 
 }  // namespace reliefsim

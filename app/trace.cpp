@@ -10,7 +10,7 @@
 
 namespace reliefsim {
 
-PixelTrace TracePixel(const HeightField& field, const RenderSettings& s, int x, int y) {
+PixelTrace TracePixel(const DepthField& field, const RenderSettings& s, int x, int y) {
     ValidateSettings(s);
     if (x < 0 || y < 0 || x >= s.width || y >= s.height)
         throw Error("pixel " + std::to_string(x) + "," + std::to_string(y) +

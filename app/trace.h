@@ -25,7 +25,7 @@ struct PixelTrace {
 /// Runs the settings' kernel for pixel (x, y) alone, recording every fetch. The kernel,
 /// sampler and inputs are those of Render(), so the result equals the frame's record at
 /// that pixel. Throws Error for a pixel outside the image.
-PixelTrace TracePixel(const HeightField& field, const RenderSettings& settings, int x,
+PixelTrace TracePixel(const DepthField& field, const RenderSettings& settings, int x,
                       int y);
 
 /// Human-readable trace: the ray, one line per fetch, and the result.

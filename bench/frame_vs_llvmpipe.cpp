@@ -61,7 +61,7 @@ int Run(int argc, char** argv) {
                             ? s.threads
                             : int(std::max(1u, std::thread::hardware_concurrency()));
     s.threads = threads;
-    HeightField field = LoadRenderMap(o);
+    DepthField field = LoadRenderMap(o);
 
     // llvmpipe first: LP_NUM_THREADS and the cache switch must be set before its screen
     // exists.

@@ -19,8 +19,8 @@ using namespace reliefsim;
 
 namespace {
 
-const HeightField& Field() {
-    static HeightField f = MakeBuiltinMap("noise", 512, 512);
+const DepthField& Field() {
+    static DepthField f = MakeBuiltinMap("noise", 512, 512);
     return f;
 }
 

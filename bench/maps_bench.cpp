@@ -15,7 +15,7 @@ const char* kMaps[] = {"shapes", "bumps", "steps", "noise"};
 
 void BM_ConeMapConservative8Bit(benchmark::State& state) {
     const int n = int(state.range(0));
-    const HeightField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", n, n));
+    const DepthField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", n, n));
     for (auto _ : state) benchmark::DoNotOptimize(GenerateConeMap(hf, ConeKind::Cone));
     state.SetItemsProcessed(state.iterations() * int64_t(n) * n);
 }
@@ -27,7 +27,7 @@ BENCHMARK(BM_ConeMapConservative8Bit)
 
 void BM_ConeMapRelaxed(benchmark::State& state) {
     const int n = int(state.range(0));
-    const HeightField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", n, n));
+    const DepthField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", n, n));
     for (auto _ : state) benchmark::DoNotOptimize(GenerateConeMap(hf, ConeKind::Relaxed));
     state.SetItemsProcessed(state.iterations() * int64_t(n) * n);
 }
@@ -45,7 +45,7 @@ void BM_ConeMapOtherKinds512(benchmark::State& state) {
     static constexpr ConeKind kKinds[] = {ConeKind::Acm8, ConeKind::RelaxedExact,
                                           ConeKind::Stacked, ConeKind::Quad};
     const ConeKind kind = kKinds[state.range(0)];
-    const HeightField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 512, 512));
+    const DepthField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 512, 512));
     for (auto _ : state) benchmark::DoNotOptimize(GenerateConeMap(hf, kind));
     state.SetLabel(std::string(ToString(kind)));
 }
@@ -56,7 +56,7 @@ BENCHMARK(BM_ConeMapOtherKinds512)
     ->Iterations(1);
 
 void BM_Acm4PlainSearch(benchmark::State& state) {
-    const HeightField hf =
+    const DepthField hf =
         QuantizeToUnorm8(MakeBuiltinMap(kMaps[state.range(0)], 256, 256));
     for (auto _ : state)
         benchmark::DoNotOptimize(GenerateSectorMapPlainSearch(hf, ConeKind::Acm4));
@@ -68,7 +68,7 @@ BENCHMARK(BM_Acm4PlainSearch)
     ->UseRealTime();
 
 void BM_Acm4Adaptive(benchmark::State& state) {
-    const HeightField hf =
+    const DepthField hf =
         QuantizeToUnorm8(MakeBuiltinMap(kMaps[state.range(0)], 256, 256));
     for (auto _ : state)
         benchmark::DoNotOptimize(GenerateAdaptiveSectorMap(hf, ConeKind::Acm4, 0.25f, 3));
@@ -83,7 +83,7 @@ void BM_DynamicSinusoidAdaptiveAcm4(benchmark::State& state) {
     // As `reliefsim maps --animate`: buffers kept across frames, map refilled in place.
     int frame = 0;
     AdaptiveWorkspace ws;
-    HeightField hf;
+    DepthField hf;
     ConeMap m;
     for (auto _ : state) {
         FillSinusoidMap(hf, 256, 256, float(frame++) / 30.0f);

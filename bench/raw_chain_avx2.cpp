@@ -25,8 +25,10 @@ template <int P>
 float Chain(const PaddedTexels& tex, const float* u0, const float* v0, int n, int chain) {
     const float* data = tex.texels.data();
     const int stride = tex.stride;
-    const __m256 fw = _mm256_set1_ps(float(tex.width)), fh = _mm256_set1_ps(float(tex.height));
-    const __m256i mw = _mm256_set1_epi32(tex.width - 1), mh = _mm256_set1_epi32(tex.height - 1);
+    const __m256 fw = _mm256_set1_ps(float(tex.width)),
+                 fh = _mm256_set1_ps(float(tex.height));
+    const __m256i mw = _mm256_set1_epi32(tex.width - 1),
+                  mh = _mm256_set1_epi32(tex.height - 1);
     const __m256i vstride = _mm256_set1_epi32(stride);
     const __m256 half = _mm256_set1_ps(0.5f);
     __m256 sum = _mm256_setzero_ps();
@@ -60,8 +62,9 @@ float Chain(const PaddedTexels& tex, const float* u0, const float* v0, int n, in
                 const __m256 r0 = _mm256_fmadd_ps(wu, _mm256_sub_ps(t[1], t[0]), t[0]);
                 const __m256 r1 = _mm256_fmadd_ps(wu, _mm256_sub_ps(t[3], t[2]), t[2]);
                 const __m256 h = _mm256_fmadd_ps(wv, _mm256_sub_ps(r1, r0), r0);
-                u[j] = _mm256_add_ps(_mm256_add_ps(u[j], _mm256_mul_ps(h, _mm256_set1_ps(0.01f))),
-                                     _mm256_set1_ps(0.0031f));
+                u[j] = _mm256_add_ps(
+                    _mm256_add_ps(u[j], _mm256_mul_ps(h, _mm256_set1_ps(0.01f))),
+                    _mm256_set1_ps(0.0031f));
                 v[j] = _mm256_add_ps(v[j], _mm256_set1_ps(0.0017f));
                 sum = _mm256_add_ps(sum, h);
             }
@@ -79,10 +82,14 @@ bool RawChainAvx2Available() { return true; }
 float RawChainAvx2(const PaddedTexels& tex, const float* u, const float* v, int n,
                    int chain, int packs) {
     switch (std::clamp(packs, 1, 4)) {
-        case 1: return Chain<1>(tex, u, v, n, chain);
-        case 2: return Chain<2>(tex, u, v, n, chain);
-        case 3: return Chain<3>(tex, u, v, n, chain);
-        default: return Chain<4>(tex, u, v, n, chain);
+        case 1:
+            return Chain<1>(tex, u, v, n, chain);
+        case 2:
+            return Chain<2>(tex, u, v, n, chain);
+        case 3:
+            return Chain<3>(tex, u, v, n, chain);
+        default:
+            return Chain<4>(tex, u, v, n, chain);
     }
 }
 

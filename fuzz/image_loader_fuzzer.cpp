@@ -90,7 +90,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
             reliefsim::MapLoadOptions o;
             o.channel = kChannels[(opts & 7) % 5];
             o.stores = (opts & 8) ? reliefsim::Stores::Depth : reliefsim::Stores::Height;
-            const reliefsim::HeightField hf = reliefsim::LoadHeightMapFile(path, o);
+            const reliefsim::DepthField hf = reliefsim::LoadHeightMapFile(path, o);
             if (hf.depth.size() != size_t(hf.width) * size_t(hf.height)) std::abort();
         }
     } catch (const reliefsim::Error&) {

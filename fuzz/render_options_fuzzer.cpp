@@ -73,7 +73,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
         std::string_view spec = options.map.map;
         if (spec.rfind("builtin:", 0) == 0 && spec.size() <= 64 &&
             SmallBuiltinSpec(spec)) {
-            const reliefsim::HeightField hf = reliefsim::LoadMapFromOptions(options.map);
+            const reliefsim::DepthField hf = reliefsim::LoadMapFromOptions(options.map);
             if (hf.Empty() || hf.depth.size() != size_t(hf.width) * size_t(hf.height))
                 std::abort();
         }

@@ -219,7 +219,7 @@ GlReference::~GlReference() {
 std::string GlReference::Renderer() const { return impl_->renderer; }
 const std::string& GlReference::FragmentSource() const { return impl_->fragmentSource; }
 
-void GlReference::Prepare(const HeightField& field, const GlScene& scene) {
+void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     Impl& m = *impl_;
     if (field.Empty()) throw Error("height field \"" + field.name + "\": empty");
     if (scene.width < 1 || scene.height < 1 || scene.width > 16384 ||
@@ -483,7 +483,7 @@ GlFrame GlReference::ReadBack() {
     return g;
 }
 
-GlFrame GlReference::Render(const HeightField& field, const GlScene& scene) {
+GlFrame GlReference::Render(const DepthField& field, const GlScene& scene) {
     Prepare(field, scene);
     DrawAndFinish();
     return ReadBack();

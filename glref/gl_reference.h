@@ -16,7 +16,7 @@
 #include "kernels/registry.h"
 #include "kernels/view_ray.h"
 #include "raster/mesh.h"
-#include "texture/height_field.h"
+#include "texture/depth_field.h"
 #include "texture/sampler.h"
 
 namespace reliefsim {
@@ -89,14 +89,14 @@ class GlReference {
 
     /// Uploads the height texture, assembles and links the twin of scene.kernel, creates
     /// the RGBA32F targets. Validates: R8 needs field.depth8; min4 is only on R32F.
-    void Prepare(const HeightField& field, const GlScene& scene);
+    void Prepare(const DepthField& field, const GlScene& scene);
     /// One draw of the prepared scene followed by glFinish (research/llvmpipe.md §4.1).
     void DrawAndFinish();
     /// Reads the targets of the last draw back into a GlFrame (rows flipped: row 0 =
     /// top).
     GlFrame ReadBack();
     /// Prepare + DrawAndFinish + ReadBack.
-    GlFrame Render(const HeightField& field, const GlScene& scene);
+    GlFrame Render(const DepthField& field, const GlScene& scene);
 
     /// The fragment shader source assembled for the last Prepare (for docs and
     /// debugging).

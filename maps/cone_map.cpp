@@ -280,7 +280,7 @@ template std::vector<float> WindowMinima(const std::vector<float>&, int, int, in
 template std::vector<uint16_t> WindowMinima(const std::vector<uint16_t>&, int, int, int,
                                             int, int);
 
-void MakeSearchWindows(const HeightField& hf, SearchWindows& out) {
+void MakeSearchWindows(const DepthField& hf, SearchWindows& out) {
     auto mn = [](float a, float b) { return std::min(a, b); };
     WindowReduceInto(hf.depth, hf.width, hf.height, 1, kTile, 1, mn, out.scratch,
                      out.win8);
@@ -288,7 +288,7 @@ void MakeSearchWindows(const HeightField& hf, SearchWindows& out) {
                      out.win32);
 }
 
-float CheckedMinDepth(const HeightField& hf) {
+float CheckedMinDepth(const DepthField& hf) {
     if (hf.width <= 0 || hf.height <= 0)
         throw Error("height map \"" + hf.name + "\": zero size (" +
                     std::to_string(hf.width) + "x" + std::to_string(hf.height) +
@@ -296,7 +296,7 @@ float CheckedMinDepth(const HeightField& hf) {
     if (hf.depth.size() != size_t(hf.width) * size_t(hf.height))
         throw Error("height map \"" + hf.name + "\": has " +
                     std::to_string(hf.depth.size()) + " depths, expected width*height");
-    ValidateHeightField(hf);
+    ValidateDepthField(hf);
     float m = hf.depth[0];
     for (float d : hf.depth) m = std::min(m, d);
     return m;
@@ -418,13 +418,13 @@ std::string ConeMapStatsJson(const ConeMap& m, const ConeMapStats& s, ConeEncodi
     return j.dump(2);
 }
 
-HeightField MakeSinusoidMap(int width, int height, float t) {
-    HeightField hf;
+DepthField MakeSinusoidMap(int width, int height, float t) {
+    DepthField hf;
     FillSinusoidMap(hf, width, height, t);
     return hf;
 }
 
-void FillSinusoidMap(HeightField& hf, int width, int height, float t) {
+void FillSinusoidMap(DepthField& hf, int width, int height, float t) {
     hf.width = width;
     hf.height = height;
     hf.name = "sinusoids";

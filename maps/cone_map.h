@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "core/enum_names.h"
-#include "texture/height_field.h"
+#include "texture/depth_field.h"
 
 namespace reliefsim {
 
@@ -130,18 +130,17 @@ std::vector<std::string> ChannelNames(ConeKind k, const ConeMapParams& p = {});
 /// Generates a cone-family map (every kind except MinMip/MaxMip) with the fast generator.
 /// Deterministic and bit-identical for any thread count (oneTBB inside). Throws Error on
 /// bad input (empty field, NaN/Inf or out-of-range depths, bad parameters).
-ConeMap GenerateConeMap(const HeightField& hf, ConeKind kind,
-                        const ConeMapParams& p = {});
+ConeMap GenerateConeMap(const DepthField& hf, ConeKind kind, const ConeMapParams& p = {});
 
 /// The brute-force oracle of the same definition (every texel against every other):
 /// Θ(N⁴) (Relaxed: Θ(N⁴·S)). For tests; use at most 128².
-ConeMap GenerateConeMapBruteForce(const HeightField& hf, ConeKind kind,
+ConeMap GenerateConeMapBruteForce(const DepthField& hf, ConeKind kind,
                                   const ConeMapParams& p = {});
 
 /// The plain ACM search of 000 §II-C (per texel and sector, rings of growing radius with
 /// the current minimum as short circuit). Exact; equal to the brute force.
 /// Quad/Acm4/Acm8/Cone.
-ConeMap GenerateSectorMapPlainSearch(const HeightField& hf, ConeKind kind);
+ConeMap GenerateSectorMapPlainSearch(const DepthField& hf, ConeKind kind);
 
 /// Adaptive hierarchical preprocessing (000 Algorithm 1) for Cone/Quad/Acm4/Acm8: a
 /// min/max depth pyramid; block ratios are conservative bounds for every texel of the
@@ -151,7 +150,7 @@ ConeMap GenerateSectorMapPlainSearch(const HeightField& hf, ConeKind kind);
 struct AdaptiveStats {
     int64_t nCopied = 0, nSearched = 0;  ///< texels (all levels) copied / searched
 };
-ConeMap GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float threshold,
+ConeMap GenerateAdaptiveSectorMap(const DepthField& hf, ConeKind kind, float threshold,
                                   int levels = 3, AdaptiveStats* stats = nullptr);
 
 /// Buffers reused across calls (pyramid levels, sorted block offsets, output), so that a
@@ -172,7 +171,7 @@ class AdaptiveWorkspace {
 
 /// As above, writing into `out` (its storage is reused when the size matches). Same
 /// result.
-void GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float threshold,
+void GenerateAdaptiveSectorMap(const DepthField& hf, ConeKind kind, float threshold,
                                int levels, AdaptiveWorkspace& ws, ConeMap& out,
                                AdaptiveStats* stats = nullptr);
 
@@ -223,8 +222,8 @@ ConeMap LoadExternalConeMap(const std::string& path, ConeKind kind, int channel,
 /// The dynamic-map demo of 000 (water): a sum of four travelling sinusoids at time t
 /// (seconds), depth in [0.05, 0.95], periodic in u and v. Regenerated every frame by
 /// `reliefsim maps --animate N`.
-HeightField MakeSinusoidMap(int width, int height, float t);
+DepthField MakeSinusoidMap(int width, int height, float t);
 /// The same into an existing field (storage reused; name, size and depths overwritten).
-void FillSinusoidMap(HeightField& hf, int width, int height, float t);
+void FillSinusoidMap(DepthField& hf, int width, int height, float t);
 
 }  // namespace reliefsim

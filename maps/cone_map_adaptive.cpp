@@ -142,7 +142,7 @@ struct AdaptiveWorkspace::Impl {
 AdaptiveWorkspace::AdaptiveWorkspace() : impl(new Impl) {}
 AdaptiveWorkspace::~AdaptiveWorkspace() { delete impl; }
 
-ConeMap GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float threshold,
+ConeMap GenerateAdaptiveSectorMap(const DepthField& hf, ConeKind kind, float threshold,
                                   int levels, AdaptiveStats* stats) {
     // Maps up to 512² keep one workspace per thread (tables of a few MB): a fresh one per
     // call returned its pages to the OS and page-faulted them back every call (5x slower
@@ -168,7 +168,7 @@ ConeMap GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float th
     return m;
 }
 
-void GenerateAdaptiveSectorMap(const HeightField& hf, ConeKind kind, float threshold,
+void GenerateAdaptiveSectorMap(const DepthField& hf, ConeKind kind, float threshold,
                                int levels, AdaptiveWorkspace& workspace, ConeMap& m,
                                AdaptiveStats* stats) {
     if (!(kind == ConeKind::Cone || kind == ConeKind::Quad || kind == ConeKind::Acm4 ||

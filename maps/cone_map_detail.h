@@ -114,7 +114,7 @@ struct SearchWindows {
     std::vector<float> scratch;  ///< reused between calls
 };
 /// Fills `out`, reusing its storage.
-void MakeSearchWindows(const HeightField& hf, SearchWindows& out);
+void MakeSearchWindows(const DepthField& hf, SearchWindows& out);
 
 inline int Wrap(int i, int n) {
     int r = i % n;
@@ -122,7 +122,7 @@ inline int Wrap(int i, int n) {
 }
 
 /// Validates the field and returns min depth.
-float CheckedMinDepth(const HeightField& hf);
+float CheckedMinDepth(const DepthField& hf);
 
 /// best[k] = min(best[k], v) for the bits k of mask; true when one improved.
 template <class T>
@@ -145,7 +145,7 @@ inline bool LowerSectors(uint8_t mask, double q, int nSectors, double* best) {
 /// One blocker candidate: updates best[k] of the sectors in off.mask when the texel at
 /// the offset is above the apex and accepted; true when a sector improved.
 template <class Accept>
-RS_INLINE bool ConsiderBlockerAt(const HeightField& hf, const Offset& off, int bx, int by,
+RS_INLINE bool ConsiderBlockerAt(const DepthField& hf, const Offset& off, int bx, int by,
                                  float apex, int nSectors, double* best, Accept& accept) {
     const float b = hf.depth[size_t(by) * size_t(hf.width) + size_t(bx)];
     if (!(b < apex)) return false;
@@ -153,7 +153,7 @@ RS_INLINE bool ConsiderBlockerAt(const HeightField& hf, const Offset& off, int b
     return LowerSectors(off.mask, CandidateQ(off.s, apex, b), nSectors, best);
 }
 template <class Accept>
-RS_INLINE bool ConsiderBlocker(const HeightField& hf, const Offset& off, int ti, int tj,
+RS_INLINE bool ConsiderBlocker(const DepthField& hf, const Offset& off, int ti, int tj,
                                float apex, int nSectors, double* best, Accept& accept) {
     return ConsiderBlockerAt(hf, off, Wrap(ti + off.dx, hf.width),
                              Wrap(tj + off.dy, hf.height), apex, nSectors, best, accept);
@@ -163,7 +163,7 @@ RS_INLINE bool ConsiderBlocker(const HeightField& hf, const Offset& off, int ti,
 /// (seed with kInfQ or a parent's bound). accept(bx, by, off) filters blockers (e.g.
 /// limiting texels).
 template <class Accept>
-void TiledSearch(const HeightField& hf, const TiledOffsets& to, const SearchWindows& sw,
+void TiledSearch(const DepthField& hf, const TiledOffsets& to, const SearchWindows& sw,
                  float dmin, int ti, int tj, float apex, int nSectors, double* best,
                  Accept&& accept) {
     const int W = hf.width, H = hf.height;
@@ -216,7 +216,7 @@ void TiledSearch(const HeightField& hf, const TiledOffsets& to, const SearchWind
 
 /// Brute force: every offset, no pruning, same arithmetic.
 template <class Accept>
-void BruteSearch(const HeightField& hf, const std::vector<Offset>& offs, int ti, int tj,
+void BruteSearch(const DepthField& hf, const std::vector<Offset>& offs, int ti, int tj,
                  float apex, int nSectors, double* best, Accept&& accept) {
     for (const Offset& off : offs)
         ConsiderBlocker(hf, off, ti, tj, apex, nSectors, best, accept);
@@ -225,7 +225,7 @@ void BruteSearch(const HeightField& hf, const std::vector<Offset>& offs, int ti,
 /// Bán et al.'s limiting test: the blocker's outward neighbour (one texel further along
 /// the offset direction, rounded to the 8-neighbourhood) is strictly deeper than the
 /// blocker.
-inline bool IsLimiting(const HeightField& hf, int bx, int by, int dx, int dy) {
+inline bool IsLimiting(const DepthField& hf, int bx, int by, int dx, int dy) {
     const int m = std::max(std::abs(dx), std::abs(dy));
     const int sx = (2 * std::abs(dx) >= m) ? (dx > 0 ? 1 : -1) : 0;
     const int sy = (2 * std::abs(dy) >= m) ? (dy > 0 ? 1 : -1) : 0;
@@ -237,7 +237,7 @@ inline bool IsLimiting(const HeightField& hf, int bx, int by, int dx, int dy) {
 /// `apex` (the source depth for plain relaxed cones); NaN-free: returns +inf for the
 /// destinations the listing ignores (depth 0 gives a NaN ratio there). The brute force's
 /// evaluation.
-float RelaxedPairRatio(const HeightField& hf, int ti, int tj, int dx, int dy, int steps,
+float RelaxedPairRatio(const DepthField& hf, int ti, int tj, int dx, int dy, int steps,
                        float apex);
 
 /// Listing 18-1/18-2 relaxed map (maps/cone_map_relaxed.cpp): outKind Relaxed
@@ -246,7 +246,7 @@ float RelaxedPairRatio(const HeightField& hf, int ti, int tj, int dx, int dy, in
 /// search, which uses the exit-field bound where its float argument holds (maps up to
 /// ~2040 texels a side at 4096 steps, ~58,000 at 128); exitField = false forces the
 /// search without it (tests).
-ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool brute,
+ConeMap RelaxedListingMap(const DepthField& hf, const ConeMapParams& p, bool brute,
                           ConeKind outKind, bool exitField = true);
 
 /// Apex depth of stacked cone k of K: d * (K - k) / K (k = 0: the surface point).
@@ -286,7 +286,7 @@ class ProgressCounter {
 
 /// Conservative ratio of every texel by levels + distance transforms (exact; 8-bit or few
 /// distinct depths). Writes q per texel.
-void ConservativeQByLevels(const HeightField& hf, const Geometry& g,
+void ConservativeQByLevels(const DepthField& hf, const Geometry& g,
                            std::vector<double>& q, const ConeMapProgress& progress = {});
 
 }  // namespace reliefsim::detail

@@ -26,7 +26,7 @@ void ForEachRow(int H, F&& f) {
                       });
 }
 
-bool UseLevels(const HeightField& hf) {
+bool UseLevels(const DepthField& hf) {
     // The levels path stores vertical distances in 16 bits.
     if (hf.height >= 0xFFFF || hf.width >= 0xFFFF) return false;
     if (!hf.depth8.empty()) return true;
@@ -45,7 +45,7 @@ using namespace detail;
 
 enum class Mode { Fast, Brute, Plain };
 
-ConeMap MakeMap(const HeightField& hf, ConeKind kind, int channels) {
+ConeMap MakeMap(const DepthField& hf, ConeKind kind, int channels) {
     ConeMap m;
     m.kind = kind;
     m.width = hf.width;
@@ -56,7 +56,7 @@ ConeMap MakeMap(const HeightField& hf, ConeKind kind, int channels) {
 }
 
 /// Conservative / sector / relaxed-exact / stacked: q per texel and channel.
-ConeMap SearchMap(const HeightField& hf, ConeKind kind, const ConeMapParams& p,
+ConeMap SearchMap(const DepthField& hf, ConeKind kind, const ConeMapParams& p,
                   Mode mode) {
     const float dmin = CheckedMinDepth(hf);
     const Geometry g = MakeGeometry(hf.width, hf.height);
@@ -128,7 +128,7 @@ ConeMap SearchMap(const HeightField& hf, ConeKind kind, const ConeMapParams& p,
 
 }  // namespace
 
-ConeMap GenerateConeMapImpl(const HeightField& hf, ConeKind kind, const ConeMapParams& p,
+ConeMap GenerateConeMapImpl(const DepthField& hf, ConeKind kind, const ConeMapParams& p,
                             Mode mode) {
     ValidateConeMapParams(p);
     switch (kind) {
@@ -148,7 +148,7 @@ ConeMap GenerateConeMapImpl(const HeightField& hf, ConeKind kind, const ConeMapP
     }
 }
 
-ConeMap GenerateConeMap(const HeightField& hf, ConeKind kind, const ConeMapParams& p) {
+ConeMap GenerateConeMap(const DepthField& hf, ConeKind kind, const ConeMapParams& p) {
     if (p.adaptive && (kind == ConeKind::Cone || kind == ConeKind::Quad ||
                        kind == ConeKind::Acm4 || kind == ConeKind::Acm8)) {
         ValidateConeMapParams(p);
@@ -157,12 +157,12 @@ ConeMap GenerateConeMap(const HeightField& hf, ConeKind kind, const ConeMapParam
     return GenerateConeMapImpl(hf, kind, p, Mode::Fast);
 }
 
-ConeMap GenerateConeMapBruteForce(const HeightField& hf, ConeKind kind,
+ConeMap GenerateConeMapBruteForce(const DepthField& hf, ConeKind kind,
                                   const ConeMapParams& p) {
     return GenerateConeMapImpl(hf, kind, p, Mode::Brute);
 }
 
-ConeMap GenerateSectorMapPlainSearch(const HeightField& hf, ConeKind kind) {
+ConeMap GenerateSectorMapPlainSearch(const DepthField& hf, ConeKind kind) {
     return SearchMap(hf, kind, {}, Mode::Plain);
 }
 

@@ -32,7 +32,7 @@ constexpr int kColBlock = 32;
 /// small sorted table with a last-value cache replaces sorting all N depths (that and the
 /// level lookup were ~30 ms of serial work at 1024²); many distinct values fall back to
 /// the sort. Either way the table holds exactly the distinct depths.
-std::vector<float> DistinctDepths(const HeightField& hf) {
+std::vector<float> DistinctDepths(const DepthField& hf) {
     const size_t N = hf.depth.size();
     std::vector<float> levels;
     float last = std::numeric_limits<float>::quiet_NaN();
@@ -53,7 +53,7 @@ std::vector<float> DistinctDepths(const HeightField& hf) {
 
 /// Level index of every texel: the position of its depth in `levels` (in parallel, with
 /// a last-value cache).
-std::vector<uint16_t> LevelIndices(const HeightField& hf,
+std::vector<uint16_t> LevelIndices(const DepthField& hf,
                                    const std::vector<float>& levels) {
     const size_t N = hf.depth.size();
     std::vector<uint16_t> lev(N);
@@ -86,7 +86,7 @@ struct RowBuffers {
 
 /// The state of the sweep over levels, shared by its stages.
 struct LevelSweep {
-    const HeightField& hf;
+    const DepthField& hf;
     const Geometry& g;
     int W = 0, H = 0;
     int L = 0;                        ///< number of levels
@@ -99,7 +99,7 @@ struct LevelSweep {
     std::vector<int32_t> levelCount;  ///< [l * H + j]: texels of row j at level l
     std::vector<int32_t> nOpen;       ///< per row: texels with lev > l and not done
     double dTop = 0;                  ///< the shallowest depth, levels[0]
-    LevelSweep(const HeightField& hf, const Geometry& g)
+    LevelSweep(const DepthField& hf, const Geometry& g)
         : hf(hf), g(g), W(hf.width), H(hf.height) {}
 };
 
@@ -299,7 +299,7 @@ void RowPass(LevelSweep& s, std::vector<double>& q, int l,
 
 }  // namespace
 
-void ConservativeQByLevels(const HeightField& hf, const Geometry& g,
+void ConservativeQByLevels(const DepthField& hf, const Geometry& g,
                            std::vector<double>& q, const ConeMapProgress& progressFn) {
     LevelSweep s(hf, g);
     const size_t N = size_t(s.W) * size_t(s.H);

@@ -45,7 +45,7 @@ RS_INLINE int WrapFloorIndex(float f, int n) {
     return Wrap(int(std::fmod(double(fi), double(n))), n);
 }
 
-RS_INLINE float NearestWrap(const HeightField& hf, float u, float v) {
+RS_INLINE float NearestWrap(const DepthField& hf, float u, float v) {
     const int i = WrapFloorIndex(u * float(hf.width), hf.width);
     const int j = WrapFloorIndex(v * float(hf.height), hf.height);
     return hf.depth[size_t(j) * size_t(hf.width) + size_t(i)];
@@ -71,7 +71,7 @@ RS_INLINE float ListingStep(float v, int steps, float inv) {
 /// destination (dstx, dsty) and its sampled depth dstz. `inv` = 1/steps when steps is a
 /// power of two (then v * inv == v / steps exactly: scaling by a power of two), else 0
 /// (divide).
-RS_INLINE float ListingRatio(const HeightField& hf, float sx, float sy, float dstx,
+RS_INLINE float ListingRatio(const DepthField& hf, float sx, float sy, float dstx,
                              float dsty, float dstz, int steps, float inv, float apex,
                              float best) {
     if (!(dstz > 0.0f)) return kInfF;  // NaN in the listing
@@ -126,7 +126,7 @@ float PowerOfTwoInverse(int steps) {
 
 }  // namespace
 
-float RelaxedPairRatio(const HeightField& hf, int ti, int tj, int dx, int dy, int steps,
+float RelaxedPairRatio(const DepthField& hf, int ti, int tj, int dx, int dy, int steps,
                        float apex) {
     const float W = float(hf.width), H = float(hf.height);
     const float sx = (float(ti) + 0.5f) / W, sy = (float(tj) + 0.5f) / H;
@@ -172,7 +172,7 @@ std::vector<uint16_t> PackAll(const std::vector<float>& v) {
 /// exact destination centre along the float step vector. The same eps also covers the
 /// rounding of |E - src| against |dst - src| + the distance travelled
 /// (docs/cone_maps.md, section "Exit bound").
-ExitField MakeExitFieldSlack(const HeightField& hf, int steps) {
+ExitField MakeExitFieldSlack(const DepthField& hf, int steps) {
     ExitField f;
     const double n = double(std::max(hf.width, hf.height));
     f.eps = 0x1p-18 + double(steps) * 0x1p-23;
@@ -278,7 +278,7 @@ ExitWindow MakeExitWindow(int W, int H, int Rx, int Ry, double e) {
 /// nearest cell deeper than d (the march's z after its first step) in the window, `edge`
 /// when none is. winMax: 8x8 window maxima of depth (tiles without a deeper cell are
 /// skipped).
-void ExitDistancesOfTexel(const HeightField& hf, const ExitWindow& win,
+void ExitDistancesOfTexel(const DepthField& hf, const ExitWindow& win,
                           const std::vector<float>& winMax, int i, int j, float d,
                           float edge, float* L) {
     const int W = hf.width, H = hf.height;
@@ -306,7 +306,7 @@ void ExitDistancesOfTexel(const HeightField& hf, const ExitWindow& win,
 
 /// The exit field (ExitField) of a map for `steps` steps; empty (usable = false) when
 /// its float argument does not hold or it is not wanted.
-ExitField BuildExitField(const HeightField& hf, int steps, float inv, bool wanted) {
+ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted) {
     ExitField f = MakeExitFieldSlack(hf, steps);
     f.usable = f.usable && wanted;
     if (!f.usable) return f;
@@ -432,7 +432,7 @@ struct RelaxedOutput {
 };
 
 /// The brute force: every pair of the definition, no pruning (the oracle).
-void BruteRelaxedMap(const HeightField& hf, const ConeMapParams& p, const Geometry& g,
+void BruteRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geometry& g,
                      RelaxedOutput& out) {
     const int W = hf.width, H = hf.height, K = out.K;
     const std::vector<Offset> offs = MakeOffsets(g, ConeKind::Cone);
@@ -549,7 +549,7 @@ struct RelaxedBest {
 /// brute force's for any order of evaluation (proof: docs/cone_maps.md, section "Exact
 /// pruning of the Listing").
 struct RelaxedSearch {
-    const HeightField& hf;
+    const DepthField& hf;
     const TiledOffsets& to;
     const RelaxedGroups& groups;
     const std::vector<float>& win;    ///< depth minima over the 8x8 windows
@@ -567,7 +567,7 @@ struct RelaxedSearch {
     float sx = 0, sy = 0;  ///< the listing's source position
     RelaxedBest rb;
 
-    RelaxedSearch(const HeightField& hf, const TiledOffsets& to,
+    RelaxedSearch(const DepthField& hf, const TiledOffsets& to,
                   const RelaxedGroups& groups, const std::vector<float>& win,
                   const std::vector<float>& win32, const std::vector<float>& win4,
                   const ExitField& ef, int steps, float inv, float dmin, int halfX)
@@ -708,7 +708,7 @@ struct RelaxedSearch {
 /// The pruned search of every texel and channel, rows in parallel; each texel's search is
 /// seeded by its left neighbour's minimiser (docs/cone_maps.md, section "Exact pruning of
 /// the Listing").
-void PrunedRelaxedMap(const HeightField& hf, const ConeMapParams& p, const Geometry& g,
+void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geometry& g,
                       float dmin, bool exitField, RelaxedOutput& out) {
     const int W = hf.width, H = hf.height, K = out.K;
     const TiledOffsets to = MakeTiledOffsets(g, ConeKind::Cone);
@@ -744,7 +744,7 @@ void PrunedRelaxedMap(const HeightField& hf, const ConeMapParams& p, const Geome
 
 }  // namespace
 
-ConeMap RelaxedListingMap(const HeightField& hf, const ConeMapParams& p, bool brute,
+ConeMap RelaxedListingMap(const DepthField& hf, const ConeMapParams& p, bool brute,
                           ConeKind outKind, bool exitField) {
     const float dmin = CheckedMinDepth(hf);
     if (hf.width > (1 << 20) || hf.height > (1 << 20))

@@ -35,7 +35,7 @@ uint64_t HashValue(uint64_t h, const T& v) {
 }
 }  // namespace
 
-uint64_t ConeMapCacheKey(const HeightField& hf, ConeKind kind, const ConeMapParams& p) {
+uint64_t ConeMapCacheKey(const DepthField& hf, ConeKind kind, const ConeMapParams& p) {
     uint64_t h = Mix64(kMagic ^ kVersion);
     h = HashValue(h, hf.width);
     h = HashValue(h, hf.height);
@@ -117,8 +117,7 @@ void MapCache::Store(uint64_t key, const ConeMap& m) const {
                         "--cache-dir \"" + dir_ + "\"");
 }
 
-ConeMap MapCache::GetOrCreate(const HeightField& hf, ConeKind kind,
-                              const ConeMapParams& p,
+ConeMap MapCache::GetOrCreate(const DepthField& hf, ConeKind kind, const ConeMapParams& p,
                               const std::function<ConeMap()>& make, bool* hit) const {
     const uint64_t key = ConeMapCacheKey(hf, kind, p);
     if (auto m = Load(key); m && m->width == hf.width && m->height == hf.height) {

@@ -12,7 +12,7 @@ namespace reliefsim {
 
 /// 64-bit key of (height field pixels, size, kind, every parameter that changes the
 /// result).
-uint64_t ConeMapCacheKey(const HeightField& hf, ConeKind kind, const ConeMapParams& p);
+uint64_t ConeMapCacheKey(const DepthField& hf, ConeKind kind, const ConeMapParams& p);
 
 /// A cache directory. An entry is "<dir>/<key hex>.rsmap": magic, format version, key,
 /// kind, size, channels, payload, and a hash of all of it. Anything that does not check
@@ -25,7 +25,7 @@ class MapCache {
     std::optional<ConeMap> Load(uint64_t key) const;
     void Store(uint64_t key, const ConeMap& m) const;  ///< atomic (temp + rename)
     /// Returns the cached map or generates, stores and returns it. *hit tells which.
-    ConeMap GetOrCreate(const HeightField& hf, ConeKind kind, const ConeMapParams& p,
+    ConeMap GetOrCreate(const DepthField& hf, ConeKind kind, const ConeMapParams& p,
                         const std::function<ConeMap()>& make, bool* hit = nullptr) const;
 
   private:

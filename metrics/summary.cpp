@@ -6,7 +6,7 @@
 
 namespace reliefsim {
 
-float PaperError(const FrameRecord& record, size_t i, const HeightField& field,
+float PaperError(const FrameRecord& record, size_t i, const DepthField& field,
                  const SamplerState& state) {
     if (!record.Covered(i)) return 0.0f;
     Sampler<false> sampler(field, state);
@@ -34,7 +34,7 @@ uint64_t BlockCost(const FrameRecord& r, int bw, int bh) {
 }
 }  // namespace
 
-FrameSummary Summarize(const FrameRecord& r, const HeightField& field,
+FrameSummary Summarize(const FrameRecord& r, const DepthField& field,
                        const SamplerState& state) {
     FrameSummary s;
     uint64_t sumCoarse = 0, sumRefine = 0;

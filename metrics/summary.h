@@ -4,7 +4,7 @@
 #include <cstdint>
 
 #include "core/record.h"
-#include "texture/height_field.h"
+#include "texture/depth_field.h"
 #include "texture/sampler.h"
 
 namespace reliefsim {
@@ -33,10 +33,10 @@ struct FrameSummary {
 
 /// Per-pixel error of the dissertation's metric (§4.1): hit depth - depth sampled (with
 /// the same sampler state, uncounted) at the hit uv. Zero for uncovered pixels.
-float PaperError(const FrameRecord& record, size_t i, const HeightField& field,
+float PaperError(const FrameRecord& record, size_t i, const DepthField& field,
                  const SamplerState& state);
 
-FrameSummary Summarize(const FrameRecord& record, const HeightField& field,
+FrameSummary Summarize(const FrameRecord& record, const DepthField& field,
                        const SamplerState& state);
 
 }  // namespace reliefsim

@@ -140,7 +140,7 @@ BatchJob MakeBatchJob(const Kernel& kernel, const Textures& textures,
     job.budget = kernel.Budget();
     job.textures = textures;
     if (!job.textures.padded)
-        job.textures = BindTextures(*textures.height, textures.sampler);
+        job.textures = BindTextures(*textures.depth, textures.sampler);
     return job;
 }
 

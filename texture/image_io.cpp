@@ -304,7 +304,7 @@ ImageData ReadImageFile(const std::string& path, const std::string& subject,
     return img;
 }
 
-HeightField LoadHeightMapFile(const std::string& path, const MapLoadOptions& options) {
+DepthField LoadHeightMapFile(const std::string& path, const MapLoadOptions& options) {
     const std::string subject = "height map " + Quote(path);
     auto pick = [&](int nc) -> std::pair<int, int> {
         int c = 0;
@@ -337,11 +337,11 @@ HeightField LoadHeightMapFile(const std::string& path, const MapLoadOptions& opt
     ImageData img = ReadImageFile(path, subject, pick, /*keep8=*/true);
     const bool flip = options.stores == Stores::Height;
     const int w = img.width, h = img.height;
-    HeightField hf;
+    DepthField hf;
     if (img.is8) {
         if (flip)
             for (auto& v : img.values8) v = uint8_t(255 - v);
-        hf = HeightFieldFromUnorm8(w, h, std::move(img.values8), path);
+        hf = DepthFieldFromUnorm8(w, h, std::move(img.values8), path);
     } else {
         // Validate as the file stores it, so a message shows the value that is in the
         // file.
@@ -369,11 +369,11 @@ HeightField LoadHeightMapFile(const std::string& path, const MapLoadOptions& opt
         hf.depth = std::move(img.values);
         hf.name = path;
     }
-    ValidateHeightField(hf);
+    ValidateDepthField(hf);
     return hf;
 }
 
-HeightField LoadHeightMap(const std::string& spec, const MapLoadOptions& options) {
+DepthField LoadHeightMap(const std::string& spec, const MapLoadOptions& options) {
     if (spec.rfind("builtin:", 0) == 0) return MakeBuiltinMap(spec);
     if (spec.empty()) throw Error("--map: empty; give a file or builtin:NAME[:SIZE]");
     return LoadHeightMapFile(spec, options);

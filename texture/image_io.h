@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "core/enum_names.h"
-#include "texture/height_field.h"
+#include "texture/depth_field.h"
 
 namespace reliefsim {
 
@@ -44,7 +44,7 @@ inline std::optional<Stores> ParseStores(std::string_view s) {
 inline std::string_view ToString(Channel c) { return kChannelNames.Name(c); }
 inline std::string_view ToString(Stores s) { return kStoresNames.Name(s); }
 
-/// How an image file becomes a HeightField.
+/// How an image file becomes a DepthField.
 struct MapLoadOptions {
     Channel channel =
         Channel::Auto;  ///< Auto: the grey channel of a 1-2 channel image, else A
@@ -84,12 +84,12 @@ ImageData ReadImageFile(const std::string& path, const std::string& subject,
                         const ChannelPicker& pickChannels, bool keep8);
 
 /// Loads PNG, TGA, EXR, TIFF (anything OpenImageIO reads; 8-bit, 16-bit or float).
-/// 8-bit sources keep their 8-bit depths (HeightField::depth8). Float values are
+/// 8-bit sources keep their 8-bit depths (DepthField::depth8). Float values are
 /// validated (finite, in [0,1]). Throws Error naming the file on any problem.
-HeightField LoadHeightMapFile(const std::string& path, const MapLoadOptions& options);
+DepthField LoadHeightMapFile(const std::string& path, const MapLoadOptions& options);
 
 /// Loads "builtin:NAME[:SIZE]" or a file path.
-HeightField LoadHeightMap(const std::string& spec, const MapLoadOptions& options);
+DepthField LoadHeightMap(const std::string& spec, const MapLoadOptions& options);
 
 /// Writes a float image (1..n channels, row-major, interleaved) to path; format by
 /// extension. Channel names are used for EXR. No time stamp is written: equal pixels give

@@ -22,16 +22,16 @@
 
 namespace reliefsim {
 
-/// The textures a kernel reads: the height map, its sampler and the height map's padded
+/// The textures a kernel reads: the depth map, its sampler and the depth map's padded
 /// texels for the sampler's wrap mode (derived maps join here).
 struct Textures {
-    const HeightField* height = nullptr;
+    const DepthField* depth = nullptr;
     SamplerState sampler;
     std::shared_ptr<const PaddedTexels> padded;  ///< null: the scalar sampler per lane
 };
 
 /// Textures for `field` sampled with `state`, with the padded texels the lanes read.
-inline Textures BindTextures(const HeightField& field, SamplerState state) {
+inline Textures BindTextures(const DepthField& field, SamplerState state) {
     return {&field, state,
             std::make_shared<const PaddedTexels>(PadTexels(field, state.wrap))};
 }
@@ -40,7 +40,7 @@ inline Textures BindTextures(const HeightField& field, SamplerState state) {
 /// builds one per batch as a local, so the fetch loop reloads nothing through pointers
 /// and tests no ownership (measured: bench/kernels_bench BM_SampleChain).
 struct LaneTextures {
-    const HeightField* field = nullptr;
+    const DepthField* field = nullptr;
     SamplerState sampler;
     const float* padded = nullptr;  ///< null: the scalar sampler per lane
     int64_t paddedCount = 0;
@@ -53,17 +53,17 @@ struct LaneTextures {
 
 inline LaneTextures BindLanes(const Textures& t) {
     LaneTextures b;
-    b.field = t.height;
+    b.field = t.depth;
     b.sampler = t.sampler;
-    b.width = t.height->width;
-    b.height = t.height->height;
+    b.width = t.depth->width;
+    b.height = t.depth->height;
     b.pow2W = detail::IsPowerOfTwo(b.width);
     b.pow2H = detail::IsPowerOfTwo(b.height);
     const bool fixed8 = t.sampler.precision == Precision::Llvmpipe8 &&
                         t.sampler.filter == Filter::Bilinear;
-    if (fixed8 && !t.height->depth8.empty()) {
-        b.depth8 = t.height->depth8.data();
-        b.depth8Count = int64_t(t.height->depth8.size());
+    if (fixed8 && !t.depth->depth8.empty()) {
+        b.depth8 = t.depth->depth8.data();
+        b.depth8Count = int64_t(t.depth->depth8.size());
     } else if (t.padded && !fixed8) {
         RS_CHECK(t.padded->width == b.width && t.padded->height == b.height &&
                  t.padded->wrap == t.sampler.wrap);

@@ -4,7 +4,7 @@
 
 namespace reliefsim {
 
-PaddedTexels PadTexels(const HeightField& field, WrapMode wrap) {
+PaddedTexels PadTexels(const DepthField& field, WrapMode wrap) {
     RS_CHECK(!field.Empty());
     PaddedTexels p;
     p.width = field.width;

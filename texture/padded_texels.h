@@ -5,12 +5,12 @@
 #include <memory>
 #include <vector>
 
-#include "texture/height_field.h"
+#include "texture/depth_field.h"
 #include "texture/sampler.h"
 
 namespace reliefsim {
 
-/// A copy of a HeightField's depths with one extra column and one extra row that hold the
+/// A copy of a DepthField's depths with one extra column and one extra row that hold the
 /// texel the wrap mode reads past the last one (repeat: the first column / row; clamp:
 /// the last). For every uv the bilinear footprint whose first texel is (i0, j0) is then
 /// the texels base, base + 1, base + stride and base + stride + 1 with base = j0 * stride
@@ -26,6 +26,6 @@ struct PaddedTexels {
 };
 
 /// The padded copy of `field` for `wrap`.
-PaddedTexels PadTexels(const HeightField& field, WrapMode wrap);
+PaddedTexels PadTexels(const DepthField& field, WrapMode wrap);
 
 }  // namespace reliefsim

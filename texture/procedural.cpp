@@ -125,7 +125,7 @@ const std::vector<std::string>& BuiltinMapNames() {
     return kNames;
 }
 
-HeightField MakeBuiltinMap(std::string_view name, int width, int height) {
+DepthField MakeBuiltinMap(std::string_view name, int width, int height) {
     auto it = std::find_if(Builtins().begin(), Builtins().end(),
                            [&](const Builtin& b) { return name == b.name; });
     if (it == Builtins().end())
@@ -135,7 +135,7 @@ HeightField MakeBuiltinMap(std::string_view name, int width, int height) {
         throw Error("--map builtin:" + std::string(name) + ": size " +
                     std::to_string(width) + "x" + std::to_string(height) +
                     " is outside [1, 16384]");
-    HeightField hf;
+    DepthField hf;
     hf.width = width;
     hf.height = height;
     hf.name = "builtin:" + std::string(name) + ":" + std::to_string(width);
@@ -149,7 +149,7 @@ HeightField MakeBuiltinMap(std::string_view name, int width, int height) {
     return hf;
 }
 
-HeightField MakeBuiltinMap(std::string_view spec) {
+DepthField MakeBuiltinMap(std::string_view spec) {
     std::string_view rest = spec;
     if (rest.rfind("builtin:", 0) == 0) rest.remove_prefix(8);
     std::string_view name = rest;

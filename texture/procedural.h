@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "core/hash.h"  // Mix64, used with the builtins
-#include "texture/height_field.h"
+#include "texture/depth_field.h"
 
 namespace reliefsim {
 
@@ -19,9 +19,9 @@ constexpr int kDefaultBuiltinSize = 256;
 
 /// Makes "builtin:NAME[:SIZE]" (SIZE in [1, 16384], default 256; square). Throws Error on
 /// an unknown name or bad size, listing the valid names.
-HeightField MakeBuiltinMap(std::string_view spec);
+DepthField MakeBuiltinMap(std::string_view spec);
 
 /// Makes a named builtin at width x height.
-HeightField MakeBuiltinMap(std::string_view name, int width, int height);
+DepthField MakeBuiltinMap(std::string_view name, int width, int height);
 
 }  // namespace reliefsim

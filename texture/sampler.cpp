@@ -3,7 +3,7 @@
 
 namespace reliefsim {
 
-float SampleCounted(const HeightField& field, const SamplerState& state, float u, float v,
+float SampleCounted(const DepthField& field, const SamplerState& state, float u, float v,
                     FetchCounts* counts) {
     Sampler<true> sampler(field, state, counts);
     return sampler.Sample(glm::vec2(u, v));

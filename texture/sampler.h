@@ -10,7 +10,7 @@
 
 #include "core/enum_names.h"
 #include "core/error.h"
-#include "texture/height_field.h"
+#include "texture/depth_field.h"
 
 namespace reliefsim {
 
@@ -27,7 +27,7 @@ enum class Precision {
     Float,      ///< float weights, fmaf lerps: llvmpipe's SoA path for R32F (§2.1)
     Llvmpipe8,  ///< llvmpipe's AoS 8.8 fixed-point path for 8-bit unorm textures (§2.2):
                 ///< 8-bit weights and 8-bit intermediate results; needs
-                ///< HeightField::depth8
+                ///< DepthField::depth8
     Gpu8,       ///< GPU-spec: float texels, weights rounded to 8 subtexel bits (1/256),
                 ///< float fmaf lerps; for artifact studies (D3D-style 8-bit subtexel
                 ///< precision)
@@ -205,7 +205,7 @@ RS_INLINE int WrapNearest(float u, int n, WrapMode wrap) {
 
 }  // namespace detail
 
-/// Binds a HeightField, a SamplerState and (when kCount) a FetchCounts. Entry points
+/// Binds a DepthField, a SamplerState and (when kCount) a FetchCounts. Entry points
 /// mirror GLSL: Sample (by the state's filter), TexelFetch. Every texel read goes through
 /// Texel(), the one place that counts. Sampler<false> is the uncounted baseline for
 /// benchmarks. Kernels are templated on the sampler (kernels/kernel.h HeightSampler), so
@@ -213,7 +213,7 @@ RS_INLINE int WrapNearest(float u, int n, WrapMode wrap) {
 template <bool kCount>
 class Sampler {
   public:
-    Sampler(const HeightField& field, SamplerState state, FetchCounts* counts = nullptr)
+    Sampler(const DepthField& field, SamplerState state, FetchCounts* counts = nullptr)
         : field_(&field), state_(state), counts_(counts) {}
 
     /// One fetch with the state's filter. Returns depth in [0,1].
@@ -256,7 +256,7 @@ class Sampler {
     }
 
     /// One fetch, 4 texel reads of depth8: llvmpipe's AoS fixed-point bilinear (§2.2).
-    /// Requires the field's depth8 (HeightField::depth8); callers validate that it is
+    /// Requires the field's depth8 (DepthField::depth8); callers validate that it is
     /// there.
     float SampleBilinearFixed8(glm::vec2 uv) {
         CountFetch();
@@ -288,7 +288,7 @@ class Sampler {
         return Texel(WrapIndex(ij.x, field_->width), WrapIndex(ij.y, field_->height));
     }
 
-    const HeightField& Field() const { return *field_; }
+    const DepthField& Field() const { return *field_; }
     const SamplerState& State() const { return state_; }
     FetchCounts* Counts() const { return counts_; }
 
@@ -310,7 +310,7 @@ class Sampler {
         return m < 0 ? m + n : m;
     }
 
-    const HeightField* field_;
+    const DepthField* field_;
     SamplerState state_;
     FetchCounts* counts_;
 };
@@ -320,7 +320,7 @@ using CountingSampler = Sampler<true>;
 /// One counted fetch with the state's filter, out of line: the lane sampler's path for
 /// the filters it does not run on lanes (compiled once, with the project's default
 /// flags).
-float SampleCounted(const HeightField& field, const SamplerState& state, float u, float v,
+float SampleCounted(const DepthField& field, const SamplerState& state, float u, float v,
                     FetchCounts* counts);
 
 }  // namespace reliefsim

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "maps/cone_map.h"
 #include "tests/app/cli_util.h"
-#include "texture/cone_map.h"
 #include "texture/image_io.h"
 #include "texture/sampler.h"
 

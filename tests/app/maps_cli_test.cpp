@@ -56,7 +56,7 @@ TEST(MapsCli, WritesMapAndStatisticsIntoANewFolder) {
     reliefsim::MapLoadOptions lo;
     lo.channel = reliefsim::Channel::R;
     lo.stores = reliefsim::Stores::Depth;
-    const reliefsim::HeightField back = reliefsim::LoadHeightMapFile(out.string(), lo);
+    const reliefsim::DepthField back = reliefsim::LoadHeightMapFile(out.string(), lo);
     EXPECT_EQ(back.width, 32);
     EXPECT_EQ(back.height, 32);
 }
@@ -99,9 +99,9 @@ TEST(MapsCli, RelaxedStackedAndConeNormal) {
     reliefsim::MapLoadOptions lo;
     lo.channel = reliefsim::Channel::R;
     lo.stores = reliefsim::Stores::Depth;
-    const reliefsim::HeightField r =
+    const reliefsim::DepthField r =
         reliefsim::LoadHeightMapFile((d / "r.exr").string(), lo);
-    const reliefsim::HeightField s0 =
+    const reliefsim::DepthField s0 =
         reliefsim::LoadHeightMapFile((d / "s.exr").string(), lo);
     EXPECT_EQ(r.depth, s0.depth);
     const Result cn =

@@ -109,7 +109,7 @@ TEST(RenderOutputs, FolderInPlaceOfEachOutputChangesNothing) {
 TEST(RenderOutputs, LibraryRefusesAFolderInPlaceOfEachOutput) {
     // The same through WriteRenderOutputs, below the command line's early checks: the
     // all-or-nothing commit itself refuses, before the first file is replaced.
-    const HeightField field = MakeBuiltinMap("builtin:shapes:32");
+    const DepthField field = MakeBuiltinMap("builtin:shapes:32");
     const RenderSettings a = SmallSettings("linear"), b = SmallSettings("relief");
     const RenderOutput outA = Render(field, a), outB = Render(field, b);
     for (const char* blocked : kRenderFiles) {
@@ -176,7 +176,7 @@ TEST(RenderOutputs, TooLongNameLeavesNoFolder) {
     ExpectOneLineFailure(r, "300");
     EXPECT_FALSE(fs::exists(d / "new"));
     // The library refuses it as well, before creating anything.
-    const HeightField field = MakeBuiltinMap("builtin:flat:8");
+    const DepthField field = MakeBuiltinMap("builtin:flat:8");
     const RenderSettings s = SmallSettings("linear");
     const RenderOutput out = Render(field, s);
     EXPECT_THROW(WriteRenderOutputs((d / "new" / longName).string(), out, s, field),
@@ -268,7 +268,7 @@ TEST(MapsOutputs, MipPyramidIsOneFileWithEveryLevel) {
                                     kind + " --out " + m.string(),
                                 d);
         ASSERT_EQ(r.exitCode, 0) << r.err;
-        const HeightField hf = MakeBuiltinMap("builtin:bumps:13");
+        const DepthField hf = MakeBuiltinMap("builtin:bumps:13");
         const auto want = BuildMipPyramid(
             hf.depth, hf.width, hf.height, 1,
             std::string(kind) == "maxmip" ? MipReduce::Min : MipReduce::Max);

@@ -45,7 +45,7 @@ void ExpectSameRecord(const FrameRecord& a, const FrameRecord& b) {
 }  // namespace
 
 TEST(Render, IdenticalForOneAndTwoThreadsAndReruns) {
-    HeightField f = MakeBuiltinMap("builtin:shapes:128");
+    DepthField f = MakeBuiltinMap("builtin:shapes:128");
     for (const char* method : {"linear", "relief", "secant", "interval", "pom"}) {
         RenderSettings s = Small(method);
         s.threads = 1;
@@ -64,7 +64,7 @@ TEST(Render, IdenticalForOneAndTwoThreadsAndReruns) {
 }
 
 TEST(Render, FlatMapHitsItsDepthEverywhere) {
-    HeightField f = MakeBuiltinMap("flat", 64, 64);
+    DepthField f = MakeBuiltinMap("flat", 64, 64);
     RenderSettings s = Small("relief");
     s.set = {"linear_steps=8", "refine_steps=5"};
     RenderOutput out = Render(f, s);
@@ -79,7 +79,7 @@ TEST(Render, FlatMapHitsItsDepthEverywhere) {
 }
 
 TEST(Render, HelperLanesExecuteAndAreCountedSeparately) {
-    HeightField f = MakeBuiltinMap("builtin:bumps:64");
+    DepthField f = MakeBuiltinMap("builtin:bumps:64");
     RenderOutput out = Render(f, Small("linear"));
     EXPECT_GT(out.record.nHelperLanes, 0u);
     EXPECT_GT(out.record.nHelperFetches, 0u);
@@ -87,7 +87,7 @@ TEST(Render, HelperLanesExecuteAndAreCountedSeparately) {
 }
 
 TEST(Render, BudgetFlagsPixels) {
-    HeightField f = MakeBuiltinMap("builtin:shapes:64");
+    DepthField f = MakeBuiltinMap("builtin:shapes:64");
     RenderSettings s = Small("relief");
     s.set = {"budget=4"};
     RenderOutput out = Render(f, s);
@@ -98,7 +98,7 @@ TEST(Render, BudgetFlagsPixels) {
 TEST(Render, WritesAllOutputsWithContractKeys) {
     fs::path dir = fs::path(::testing::TempDir()) / "rs_render_outputs";
     fs::remove_all(dir);
-    HeightField f = MakeBuiltinMap("builtin:shapes:64");
+    DepthField f = MakeBuiltinMap("builtin:shapes:64");
     RenderSettings s = Small("relief");
     RenderOutput out = Render(f, s);
     WriteRenderOutputs(dir.string(), out, s, f);
@@ -123,7 +123,7 @@ TEST(Render, WritesAllOutputsWithContractKeys) {
 }
 
 TEST(Render, InvalidSettingsThrowBeforeRendering) {
-    HeightField f = MakeBuiltinMap("builtin:flat:8");
+    DepthField f = MakeBuiltinMap("builtin:flat:8");
     RenderSettings s = Small("relief");
     s.depthScale = 0.0f;
     EXPECT_THROW(Render(f, s), Error);
@@ -135,7 +135,7 @@ TEST(Render, InvalidSettingsThrowBeforeRendering) {
 }
 
 TEST(Trace, MatchesTheFrameRecordAtEveryProbedPixel) {
-    HeightField f = MakeBuiltinMap("builtin:shapes:128");
+    DepthField f = MakeBuiltinMap("builtin:shapes:128");
     for (const char* method : {"relief", "secant", "interval"}) {
         RenderSettings s = Small(method);
         RenderOutput out = Render(f, s);
@@ -161,7 +161,7 @@ TEST(Render, OutputCreatesMissingParentsOnlyOnSuccess) {
     fs::path base = fs::path(::testing::TempDir()) / "rs_render_parents";
     fs::remove_all(base);
     fs::create_directories(base);
-    HeightField f = MakeBuiltinMap("builtin:flat:8");
+    DepthField f = MakeBuiltinMap("builtin:flat:8");
     RenderSettings s = Small("linear");
     s.width = s.height = 16;
     RenderOutput out = Render(f, s);

@@ -36,8 +36,8 @@ void PrintTo(const Case& c, std::ostream* os) {
         << ToString(c.format);
 }
 
-HeightField LoadField(const std::string& map, TextureFormat format) {
-    HeightField f = LoadHeightMap(map, MapLoadOptions{});
+DepthField LoadField(const std::string& map, TextureFormat format) {
+    DepthField f = LoadHeightMap(map, MapLoadOptions{});
     if (format == TextureFormat::R8 && f.depth8.size() != f.depth.size())
         f = QuantizeToUnorm8(f);
     return f;
@@ -73,7 +73,7 @@ TEST_P(GlCompareMatrix, BitIdenticalAndLaneCostExact) {
     s.width = s.height = c.size;
     s.sampler.precision =
         c.format == TextureFormat::R8 ? Precision::Llvmpipe8 : Precision::Float;
-    HeightField field = LoadField(c.map, c.format);
+    DepthField field = LoadField(c.map, c.format);
     ExpectIdentical(RunGlCompare(field, s, Gl()));
 }
 
@@ -218,7 +218,7 @@ TEST(GlCompare, SamplerModesParametersAndViewsAreBitIdentical) {
 TEST(GlCompare, DetectsASamplerMismatch) {
     // The C++ side filters the 8-bit field in float while llvmpipe uses 8.8 fixed point:
     // the comparison must see it (it is not vacuous).
-    HeightField field = LoadField("builtin:shapes", TextureFormat::R8);
+    DepthField field = LoadField("builtin:shapes", TextureFormat::R8);
     RenderSettings s;
     s.width = s.height = 128;
     RenderOutput cpu = Render(field, s);
@@ -236,7 +236,7 @@ TEST(GlCompare, JsonHasTheContractKeys) {
     RenderOptions o;
     o.size = "64x64";
     ResolveRenderSettings(o);
-    HeightField field = LoadRenderMap(o);
+    DepthField field = LoadRenderMap(o);
     GlCompareResult r = RunGlCompare(field, o.settings, Gl());
     nlohmann::json j = GlCompareJson(r, o, field);
     ASSERT_TRUE(j.contains("pixels"));
@@ -276,7 +276,7 @@ TEST(GlReference, RejectsGpu8AndMissingDepth8) {
     s.sampler.precision = Precision::Float;
     GlScene scene = MakeGlScene(s);
     scene.format = TextureFormat::R8;
-    HeightField f = LoadHeightMap("builtin:flat:16", MapLoadOptions{});
+    DepthField f = LoadHeightMap("builtin:flat:16", MapLoadOptions{});
     f.depth8.clear();
     try {
         Gl().Prepare(f, scene);

@@ -14,8 +14,8 @@ using namespace reliefsim;
 
 namespace {
 
-HeightField Constant(float depth, int n = 64) {
-    HeightField f;
+DepthField Constant(float depth, int n = 64) {
+    DepthField f;
     f.width = f.height = n;
     f.depth.assign(size_t(n) * size_t(n), depth);
     f.name = "constant";
@@ -59,7 +59,7 @@ struct MarchRun {
 
 // Runs the ray through the driver's single-lane reference, and through every other lane
 // width this CPU runs (as lane 0 of a pack), which must agree bit for bit.
-MarchRun March(const TestKernel& k, const HeightField& f, MarchInput in,
+MarchRun March(const TestKernel& k, const DepthField& f, MarchInput in,
                SamplerState st = {}) {
     const KernelInfo& info = FindMethod(MethodName(k.refinement));
     ParamValues values = ResolveParams(info, {});
@@ -94,7 +94,7 @@ constexpr SamplerState kClampBilinear{Filter::Bilinear, WrapMode::Clamp};
 }  // namespace
 
 TEST(LinearSearch, FlatPlaneHitsAtItsDepth) {
-    HeightField f = Constant(0.5f);
+    DepthField f = Constant(0.5f);
     MarchInput in{{0.3f, 0.4f}, {0.2f, -0.1f}};
     MarchRun r = March(Configure(Refinement::None, 32, 0), f, in);
     EXPECT_TRUE(r.result.hit);
@@ -107,7 +107,7 @@ TEST(LinearSearch, FlatPlaneHitsAtItsDepth) {
 }
 
 TEST(LinearSearch, MapNeverHitCostsExactlyNFetches) {
-    HeightField f = Constant(1.0f);  // the bottom: samples stop at t = (N-1)/N
+    DepthField f = Constant(1.0f);  // the bottom: samples stop at t = (N-1)/N
     for (int n : {1, 5, 32, 100}) {
         MarchRun r =
             March(Configure(Refinement::None, n, 0), f, {{0.1f, 0.1f}, {0.3f, 0.2f}});
@@ -120,7 +120,7 @@ TEST(LinearSearch, MapNeverHitCostsExactlyNFetches) {
 }
 
 TEST(LinearSearch, FixedLoopsFetchEveryStepButLatchTheHit) {
-    HeightField f = Constant(0.25f);
+    DepthField f = Constant(0.25f);
     MarchInput in{{0.5f, 0.5f}, {0.1f, 0.1f}};
     MarchRun brk = March(Configure(Refinement::None, 16, 0, true), f, in);
     MarchRun fixed = March(Configure(Refinement::None, 16, 0, false), f, in);
@@ -132,7 +132,7 @@ TEST(LinearSearch, FixedLoopsFetchEveryStepButLatchTheHit) {
 }
 
 TEST(LinearSearch, BudgetStopsAndFlags) {
-    HeightField f = Constant(0.9f);
+    DepthField f = Constant(0.9f);
     MarchRun r = March(Configure(Refinement::Binary, 32, 6, true, 10), f,
                        {{0.2f, 0.2f}, {0.1f, 0.0f}});
     EXPECT_TRUE(r.result.budgetExhausted);
@@ -147,7 +147,7 @@ TEST(LinearSearch, BudgetStopsAndFlags) {
 }
 
 TEST(LinearSearch, HitAtTopIsExactWithoutRefinement) {
-    HeightField f = Constant(0.0f);
+    DepthField f = Constant(0.0f);
     MarchRun r =
         March(Configure(Refinement::Binary, 32, 6), f, {{0.2f, 0.2f}, {0.4f, 0.1f}});
     EXPECT_TRUE(r.result.hit);
@@ -157,7 +157,7 @@ TEST(LinearSearch, HitAtTopIsExactWithoutRefinement) {
 }
 
 TEST(Relief, FlatPlaneErrorBoundedByBisection) {
-    HeightField f = Constant(0.53f);
+    DepthField f = Constant(0.53f);
     for (int refine : {0, 1, 2, 4, 8}) {
         MarchRun r = March(Configure(Refinement::Binary, 16, refine), f,
                            {{0.3f, 0.3f}, {0.2f, 0.2f}});
@@ -169,7 +169,7 @@ TEST(Relief, FlatPlaneErrorBoundedByBisection) {
 }
 
 TEST(Relief, SlantedPlaneMatchesClosedForm) {
-    HeightField f = MakeBuiltinMap("ramp", 256, 4);
+    DepthField f = MakeBuiltinMap("ramp", 256, 4);
     MarchInput in{{0.6f, 0.5f}, {-0.3f, 0.0f}};
     const float tStar = 0.6f / 1.3f;
     MarchRun r = March(Configure(Refinement::Binary, 32, 10), f, in, kClampBilinear);
@@ -178,7 +178,7 @@ TEST(Relief, SlantedPlaneMatchesClosedForm) {
 }
 
 TEST(Relief, ErrorHalvesPerBinaryStep) {
-    HeightField f = MakeBuiltinMap("ramp", 1024, 4);
+    DepthField f = MakeBuiltinMap("ramp", 1024, 4);
     double previous = 0.0;
     for (int refine = 0; refine <= 8; ++refine) {
         double sum = 0.0;
@@ -203,7 +203,7 @@ TEST(Relief, ErrorHalvesPerBinaryStep) {
 }
 
 TEST(Interval, SlantedPlaneIsExactAfterOneStep) {
-    HeightField f = MakeBuiltinMap("ramp", 256, 4);
+    DepthField f = MakeBuiltinMap("ramp", 256, 4);
     MarchInput in{{0.6f, 0.5f}, {-0.3f, 0.0f}};
     MarchRun r = March(Configure(Refinement::Interval, 16, 1), f, in, kClampBilinear);
     EXPECT_NEAR(r.result.depthHit, 0.6f / 1.3f, 2e-6f);
@@ -211,7 +211,7 @@ TEST(Interval, SlantedPlaneIsExactAfterOneStep) {
 }
 
 TEST(Pom, OneSecantStepWithoutFetch) {
-    HeightField f = MakeBuiltinMap("ramp", 256, 4);
+    DepthField f = MakeBuiltinMap("ramp", 256, 4);
     MarchInput in{{0.6f, 0.5f}, {-0.3f, 0.0f}};
     MarchRun lin = March(Configure(Refinement::None, 16, 0), f, in, kClampBilinear);
     MarchRun pom = March(Configure(Refinement::Pom, 16, 0), f, in, kClampBilinear);
@@ -221,7 +221,7 @@ TEST(Pom, OneSecantStepWithoutFetch) {
 }
 
 TEST(Secant, ConvergesWithinToleranceAndStops) {
-    HeightField f = MakeBuiltinMap("bumps", 256, 256);
+    DepthField f = MakeBuiltinMap("bumps", 256, 256);
     TestKernel k = Configure(Refinement::Secant, 32, 10);
     k.secantTolerance = 1e-4f;
     TestKernel dense = Configure(Refinement::Binary, 1024, 20);
@@ -244,7 +244,7 @@ TEST(Secant, ConvergesWithinToleranceAndStops) {
 }
 
 TEST(Secant, FlatPlaneConvergesInOneIteration) {
-    HeightField f = Constant(0.4f);
+    DepthField f = Constant(0.4f);
     MarchRun r =
         March(Configure(Refinement::Secant, 10, 10), f, {{0.5f, 0.5f}, {0.3f, 0.0f}});
     EXPECT_EQ(r.result.nRefine, 1);
@@ -255,7 +255,7 @@ TEST(LinearSearch, StepEdgeHitsTheWall) {
     // depth 0.2 for u < 0.5, 0.8 beyond; ray from u = 0.6 towards -u: the wall at u = 0.5
     // is reached at t = 0.2, where the depth there (0.2) is already below the ray: hit =
     // 0.2.
-    HeightField f = MakeBuiltinMap("step", 256, 4);
+    DepthField f = MakeBuiltinMap("step", 256, 4);
     MarchInput in{{0.6f, 0.5f}, {-0.5f, 0.0f}};
     SamplerState nearest{Filter::Nearest, WrapMode::Clamp};
     MarchRun relief = March(Configure(Refinement::Binary, 32, 12), f, in, nearest);
@@ -264,7 +264,7 @@ TEST(LinearSearch, StepEdgeHitsTheWall) {
 }
 
 TEST(LinearSearch, GrazingRaysTerminateFinite) {
-    HeightField f = MakeBuiltinMap("noise", 64, 64);
+    DepthField f = MakeBuiltinMap("noise", 64, 64);
     for (float big : {1e3f, 1e6f, 1e9f}) {
         for (Refinement r : {Refinement::None, Refinement::Binary, Refinement::Interval,
                              Refinement::Secant, Refinement::Pom}) {

@@ -22,8 +22,8 @@
 namespace reliefsim {
 namespace {
 
-HeightField RandomField(int w, int h, uint64_t seed, bool smooth) {
-    HeightField hf;
+DepthField RandomField(int w, int h, uint64_t seed, bool smooth) {
+    DepthField hf;
     hf.width = w;
     hf.height = h;
     hf.name = "random";
@@ -57,8 +57,8 @@ void ExpectBitEqual(const ConeMap& a, const ConeMap& b, const std::string& what)
                        << (bad ? b.values[first] : 0.0f);
 }
 
-std::vector<HeightField> Fields(int n) {
-    std::vector<HeightField> v;
+std::vector<DepthField> Fields(int n) {
+    std::vector<DepthField> v;
     v.push_back(RandomField(n, n, 7, false));
     v.push_back(RandomField(n, n, 8, true));
     v.push_back(QuantizeToUnorm8(RandomField(n, n, 9, true)));
@@ -69,7 +69,7 @@ std::vector<HeightField> Fields(int n) {
 }
 
 TEST(ConeMap, FastEqualsBruteForceAt32) {
-    for (const HeightField& hf : Fields(32))
+    for (const DepthField& hf : Fields(32))
         for (ConeKind k :
              {ConeKind::Cone, ConeKind::Quad, ConeKind::Acm4, ConeKind::Acm8,
               ConeKind::RelaxedExact, ConeKind::Stacked, ConeKind::ConeNormal})
@@ -78,17 +78,17 @@ TEST(ConeMap, FastEqualsBruteForceAt32) {
 }
 
 TEST(ConeMap, FastEqualsBruteForceAt64) {
-    for (const HeightField& hf : Fields(64))
+    for (const DepthField& hf : Fields(64))
         for (ConeKind k : {ConeKind::Cone, ConeKind::Acm4, ConeKind::RelaxedExact})
             ExpectBitEqual(GenerateConeMap(hf, k), GenerateConeMapBruteForce(hf, k),
                            hf.name + " " + std::string(ToString(k)));
 }
 
 TEST(ConeMap, FastEqualsBruteForceAt128) {
-    const HeightField a = QuantizeToUnorm8(MakeBuiltinMap("shapes", 128, 128));
+    const DepthField a = QuantizeToUnorm8(MakeBuiltinMap("shapes", 128, 128));
     ExpectBitEqual(GenerateConeMap(a, ConeKind::Cone),
                    GenerateConeMapBruteForce(a, ConeKind::Cone), "shapes 8-bit 128");
-    const HeightField b = RandomField(128, 128, 11, true);
+    const DepthField b = RandomField(128, 128, 11, true);
     ExpectBitEqual(GenerateConeMap(b, ConeKind::Quad),
                    GenerateConeMapBruteForce(b, ConeKind::Quad), "random float 128 quad");
 }
@@ -96,7 +96,7 @@ TEST(ConeMap, FastEqualsBruteForceAt128) {
 TEST(ConeMap, NonSquareAndOddSizesMatchBruteForce) {
     for (auto [w, h] :
          {std::pair{24, 40}, std::pair{33, 17}, std::pair{1, 9}, std::pair{5, 5}}) {
-        const HeightField hf = RandomField(w, h, 3, true);
+        const DepthField hf = RandomField(w, h, 3, true);
         for (ConeKind k :
              {ConeKind::Cone, ConeKind::Acm8, ConeKind::Quad, ConeKind::RelaxedExact})
             ExpectBitEqual(GenerateConeMap(hf, k), GenerateConeMapBruteForce(hf, k),
@@ -114,8 +114,8 @@ TEST(ConeMap, LevelsPathOnWideRowsMatchesPlainSearch) {
     // which the brute-force tests cover. Non-square sizes exercise the weighted geometry
     // and wrap.
     for (auto [w, h] : {std::pair{512, 40}, std::pair{300, 64}, std::pair{256, 256}}) {
-        for (const HeightField& hf : {QuantizeToUnorm8(MakeBuiltinMap("shapes", w, h)),
-                                      QuantizeToUnorm8(RandomField(w, h, 13, true))})
+        for (const DepthField& hf : {QuantizeToUnorm8(MakeBuiltinMap("shapes", w, h)),
+                                     QuantizeToUnorm8(RandomField(w, h, 13, true))})
             ExpectBitEqual(GenerateConeMap(hf, ConeKind::Cone),
                            GenerateSectorMapPlainSearch(hf, ConeKind::Cone),
                            hf.name + " " + std::to_string(w) + "x" + std::to_string(h));
@@ -125,18 +125,18 @@ TEST(ConeMap, LevelsPathOnWideRowsMatchesPlainSearch) {
 TEST(ConeMap, RelaxedFastEqualsListingBruteForce) {
     ConeMapParams p;
     p.searchSteps = 32;
-    for (const HeightField& hf :
+    for (const DepthField& hf :
          {MakeBuiltinMap("shapes", 32, 32), RandomField(32, 32, 5, true),
           QuantizeToUnorm8(MakeBuiltinMap("bumps", 24, 24))})
         ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed, p),
                        GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p),
                        hf.name + " relaxed");
     p.searchSteps = 128;
-    for (const HeightField& hf : {MakeBuiltinMap("steps", 32, 32),
-                                  QuantizeToUnorm8(MakeBuiltinMap("shapes", 48, 48)),
-                                  RandomField(40, 40, 6, false),
-                                  QuantizeToUnorm8(MakeBuiltinMap("noise", 40, 40)),
-                                  RandomField(36, 20, 12, true)})
+    for (const DepthField& hf : {MakeBuiltinMap("steps", 32, 32),
+                                 QuantizeToUnorm8(MakeBuiltinMap("shapes", 48, 48)),
+                                 RandomField(40, 40, 6, false),
+                                 QuantizeToUnorm8(MakeBuiltinMap("noise", 40, 40)),
+                                 RandomField(36, 20, 12, true)})
         ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed, p),
                        GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p),
                        hf.name + " relaxed 128 " + std::to_string(hf.width));
@@ -144,8 +144,8 @@ TEST(ConeMap, RelaxedFastEqualsListingBruteForce) {
 
 /// A plateau at depth 0.5 with a few deeper and higher texels: most nearest deeper cells
 /// lie beyond the exit field's search window, whose edge then bounds the march.
-HeightField PlateauField(int n) {
-    HeightField hf;
+DepthField PlateauField(int n) {
+    DepthField hf;
     hf.width = hf.height = n;
     hf.name = "plateau";
     hf.depth.assign(size_t(n) * size_t(n), 0.5f);
@@ -161,14 +161,14 @@ TEST(ConeMap, RelaxedFastEqualsListingBruteForceAt64And128) {
     // 64²; an 8-bit built-in and a random float map at 128².
     for (const char* name : {"shapes", "bumps", "steps", "noise"})
         for (bool q : {false, true}) {
-            const HeightField f = MakeBuiltinMap(name, 64, 64);
-            const HeightField hf = q ? QuantizeToUnorm8(f) : f;
+            const DepthField f = MakeBuiltinMap(name, 64, 64);
+            const DepthField hf = q ? QuantizeToUnorm8(f) : f;
             ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed),
                            GenerateConeMapBruteForce(hf, ConeKind::Relaxed),
                            std::string(name) + (q ? " u8" : " float") + " 64");
         }
-    for (const HeightField& hf : {QuantizeToUnorm8(MakeBuiltinMap("shapes", 128, 128)),
-                                  RandomField(128, 128, 31, true)})
+    for (const DepthField& hf : {QuantizeToUnorm8(MakeBuiltinMap("shapes", 128, 128)),
+                                 RandomField(128, 128, 31, true)})
         ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed),
                        GenerateConeMapBruteForce(hf, ConeKind::Relaxed),
                        hf.name + " 128");
@@ -182,23 +182,23 @@ TEST(ConeMap, RelaxedVariantsMatchTheirBruteForce) {
     ConeMapParams p;
     for (int steps : {37, 1, 4096}) {
         p.searchSteps = steps;
-        const HeightField hf = steps == 4096
-                                   ? QuantizeToUnorm8(MakeBuiltinMap("shapes", 16, 16))
-                                   : QuantizeToUnorm8(MakeBuiltinMap("noise", 24, 24));
+        const DepthField hf = steps == 4096
+                                  ? QuantizeToUnorm8(MakeBuiltinMap("shapes", 16, 16))
+                                  : QuantizeToUnorm8(MakeBuiltinMap("noise", 24, 24));
         ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed, p),
                        GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p),
                        "relaxed steps " + std::to_string(steps));
     }
     p.searchSteps = 128;
-    HeightField zeros = RandomField(28, 28, 21, false);
+    DepthField zeros = RandomField(28, 28, 21, false);
     for (size_t t = 0; t < zeros.depth.size(); t += 7) zeros.depth[t] = 0.0f;
-    for (const HeightField& hf : {PlateauField(48), zeros})
+    for (const DepthField& hf : {PlateauField(48), zeros})
         ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed, p),
                        GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p), hf.name);
     p.relaxed = true;
     p.stackedCount = 3;
     for (ConeKind k : {ConeKind::Stacked, ConeKind::ConeNormal}) {
-        const HeightField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 32, 32));
+        const DepthField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 32, 32));
         const ConeMap fast = GenerateConeMap(hf, k, p);
         EXPECT_EQ(fast.channels, k == ConeKind::Stacked ? 3 : 1);
         ExpectBitEqual(fast, GenerateConeMapBruteForce(hf, k, p),
@@ -211,8 +211,8 @@ TEST(ConeMap, RelaxedSearchWithoutExitFieldMatchesBruteForce) {
     // the exit-field bound; the same code path, forced on small maps.
     ConeMapParams p;
     p.searchSteps = 64;
-    for (const HeightField& hf : {QuantizeToUnorm8(MakeBuiltinMap("shapes", 40, 40)),
-                                  RandomField(32, 24, 17, true)}) {
+    for (const DepthField& hf : {QuantizeToUnorm8(MakeBuiltinMap("shapes", 40, 40)),
+                                 RandomField(32, 24, 17, true)}) {
         const ConeMap brute = GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p);
         ExpectBitEqual(detail::RelaxedListingMap(hf, p, false, ConeKind::Relaxed, false),
                        brute, hf.name + " without exit field");
@@ -225,7 +225,7 @@ TEST(ConeMap, StackedRelaxedChannelsWidenUpwards) {
     // Channel 0 (apex on the surface) is the relaxed map itself; a higher apex (channel
     // k) sees fewer destinations above it and a shorter height to every exit point, so
     // its ratio is never smaller.
-    const HeightField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 48, 48));
+    const DepthField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 48, 48));
     ConeMapParams p;
     p.relaxed = true;
     p.stackedCount = 4;
@@ -248,8 +248,8 @@ TEST(ConeMap, RelaxedIsNeverNarrowerThanConservative) {
     // A destination is a texel above the apex and the listing's exit point lies beyond it
     // and deeper, so every relaxed ratio is at least the conservative bound of that
     // texel.
-    for (const HeightField& hf : {QuantizeToUnorm8(MakeBuiltinMap("bumps", 64, 64)),
-                                  RandomField(40, 40, 3, true)}) {
+    for (const DepthField& hf : {QuantizeToUnorm8(MakeBuiltinMap("bumps", 64, 64)),
+                                 RandomField(40, 40, 3, true)}) {
         const ConeMap cone = GenerateConeMap(hf, ConeKind::Cone);
         const ConeMap rel = GenerateConeMap(hf, ConeKind::Relaxed);
         for (size_t t = 0; t < cone.values.size(); ++t)
@@ -262,7 +262,7 @@ TEST(ConeMap, ProgressIsReportedInGrowingWholePercents) {
     // The levels path, the tiled search and the relaxed search each report up to 100
     // growing fractions ending at 1; the map does not depend on whether progress is
     // reported.
-    const HeightField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 96, 96));
+    const DepthField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 96, 96));
     for (ConeKind k : {ConeKind::Cone, ConeKind::Acm4, ConeKind::Relaxed}) {
         std::vector<double> seen;
         ConeMapParams p;
@@ -283,7 +283,7 @@ TEST(ConeMap, ProgressIsReportedInGrowingWholePercents) {
 TEST(ConeMap, RelaxedWorkedExampleOfTheDocs) {
     // docs/cone_maps.md, "Worked example: relaxed vs relaxed-exact": a 16x16 map whose
     // depth depends on the column only; apex texel i = 1.
-    HeightField hf;
+    DepthField hf;
     hf.width = hf.height = 16;
     hf.name = "example";
     const float col[16] = {0.75f, 0.75f, 0.5f, 0.25f, 0.25f, 0.25f, 0.25f, 1,
@@ -313,7 +313,7 @@ TEST(ConeMap, RelaxedWorkedExampleOfTheDocs) {
 }
 
 /// Exact real-number check: no texel above the apex lies strictly inside the stored cone.
-void ExpectConservative(const HeightField& hf, const ConeMap& m) {
+void ExpectConservative(const DepthField& hf, const ConeMap& m) {
     const int W = hf.width, H = hf.height;
     for (int j = 0; j < H; ++j)
         for (int i = 0; i < W; ++i) {
@@ -335,12 +335,12 @@ void ExpectConservative(const HeightField& hf, const ConeMap& m) {
 }
 
 TEST(ConeMap, ConservativeAfterEncoding) {
-    const HeightField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 32, 32));
+    const DepthField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 32, 32));
     const ConeMap exact = GenerateConeMap(hf, ConeKind::Cone);
     ExpectConservative(hf, exact);
     for (ConeEncoding e : {ConeEncoding::U8, ConeEncoding::U8Sqrt, ConeEncoding::U16})
         ExpectConservative(hf, QuantizeConeMap(exact, e));
-    const HeightField rnd = RandomField(24, 24, 2, false);
+    const DepthField rnd = RandomField(24, 24, 2, false);
     ExpectConservative(rnd, GenerateConeMap(rnd, ConeKind::Cone));
 }
 
@@ -360,10 +360,10 @@ TEST(ConeMap, EncodingNeverWidens) {
 }
 
 TEST(ConeMap, BilinearSafetyPassStaysConservative) {
-    const HeightField hf = MakeBuiltinMap("shapes", 64, 64);
+    const DepthField hf = MakeBuiltinMap("shapes", 64, 64);
     const ConeMap exact = GenerateConeMap(hf, ConeKind::Cone);
     const ConeMap safe = QuantizeConeMap(BilinearSafetyPass(exact), ConeEncoding::U8);
-    HeightField tex;  // the map as a texture for the project's bilinear sampler
+    DepthField tex;  // the map as a texture for the project's bilinear sampler
     tex.width = safe.width;
     tex.height = safe.height;
     tex.depth = safe.values;
@@ -387,7 +387,7 @@ TEST(ConeMap, BilinearSafetyPassStaysConservative) {
 }
 
 TEST(ConeMap, AdaptiveNeverWider) {
-    for (const HeightField& hf :
+    for (const DepthField& hf :
          {MakeBuiltinMap("shapes", 64, 64), MakeBuiltinMap("bumps", 64, 64),
           RandomField(64, 64, 4, true), RandomField(48, 40, 4, false)})
         for (ConeKind k :
@@ -410,13 +410,13 @@ TEST(ConeMap, AdaptiveNeverWider) {
 }
 
 TEST(ConeMap, AdaptiveWithZeroLevelsIsExact) {
-    const HeightField hf = MakeBuiltinMap("shapes", 32, 32);
+    const DepthField hf = MakeBuiltinMap("shapes", 32, 32);
     ExpectBitEqual(GenerateAdaptiveSectorMap(hf, ConeKind::Acm4, 0.5f, 0),
                    GenerateConeMap(hf, ConeKind::Acm4), "levels 0");
 }
 
 TEST(ConeMap, SectorsAreAtLeastTheConservativeRatio) {
-    const HeightField hf = MakeBuiltinMap("shapes", 32, 32);
+    const DepthField hf = MakeBuiltinMap("shapes", 32, 32);
     const ConeMap c = GenerateConeMap(hf, ConeKind::Cone);
     for (ConeKind k :
          {ConeKind::Quad, ConeKind::Acm4, ConeKind::Acm8, ConeKind::RelaxedExact}) {
@@ -437,7 +437,7 @@ TEST(ConeMap, SectorsAreAtLeastTheConservativeRatio) {
 }
 
 TEST(ConeMap, DeterministicForAnyThreadCount) {
-    const HeightField hf = QuantizeToUnorm8(MakeBuiltinMap("noise", 96, 96));
+    const DepthField hf = QuantizeToUnorm8(MakeBuiltinMap("noise", 96, 96));
     ConeMap one, two;
     {
         tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
@@ -477,7 +477,7 @@ TEST(ConeMap, CacheDetectsCorruptAndStaleEntries) {
                      ("rs_cone_cache_" + std::to_string(::getpid()));
     std::filesystem::remove_all(dir);
     MapCache cache(dir.string());
-    const HeightField hf = MakeBuiltinMap("shapes", 16, 16);
+    const DepthField hf = MakeBuiltinMap("shapes", 16, 16);
     int made = 0;
     auto make = [&] {
         ++made;
@@ -503,7 +503,7 @@ TEST(ConeMap, CacheDetectsCorruptAndStaleEntries) {
     cache.GetOrCreate(hf, ConeKind::Cone, {}, make, &hit);
     EXPECT_FALSE(hit);
     // Other pixels or parameters: other key.
-    HeightField hf2 = hf;
+    DepthField hf2 = hf;
     hf2.depth[5] = 0.123f;
     EXPECT_NE(ConeMapCacheKey(hf, ConeKind::Cone, {}),
               ConeMapCacheKey(hf2, ConeKind::Cone, {}));
@@ -516,10 +516,10 @@ TEST(ConeMap, CacheDetectsCorruptAndStaleEntries) {
 }
 
 TEST(ConeMap, BadInputGivesOneClearError) {
-    HeightField hf = MakeBuiltinMap("flat", 8, 8);
+    DepthField hf = MakeBuiltinMap("flat", 8, 8);
     hf.depth[3] = std::nanf("");
     EXPECT_THROW(GenerateConeMap(hf, ConeKind::Cone), Error);
-    HeightField empty;
+    DepthField empty;
     empty.name = "empty";
     try {
         GenerateConeMap(empty, ConeKind::Cone);
@@ -586,7 +586,7 @@ TEST(ConeMap, GpuGemsTile1ConeMapStatistics) {
     MapLoadOptions lo;
     lo.channel = Channel::A;
     lo.stores = Stores::Depth;  // A = depth, 0 = top
-    const HeightField hf = LoadHeightMapFile(dir + "tile1.tga", lo);
+    const DepthField hf = LoadHeightMapFile(dir + "tile1.tga", lo);
     ASSERT_EQ(hf.width, 256);
     const ConeMap ours =
         QuantizeConeMap(GenerateConeMap(hf, ConeKind::Cone), ConeEncoding::U8);
@@ -665,7 +665,7 @@ TEST(ConeMap, GpuGemsMapsStoreRatioTimesSourceDepth) {
         MapLoadOptions lo;
         lo.channel = Channel::A;
         lo.stores = Stores::Depth;
-        const HeightField hf = LoadHeightMapFile(hpath, lo);
+        const DepthField hf = LoadHeightMapFile(hpath, lo);
         const ConeMap ours = GenerateConeMap(hf, c.kind);
         const ConeMap gg = LoadExternalConeMap(cpath, c.kind, 2, hf.width, hf.height);
         int64_t n = 0, near2 = 0, plainNear2 = 0;

@@ -6,8 +6,8 @@
 using namespace reliefsim;
 
 namespace {
-HeightField Constant(float d) {
-    HeightField f;
+DepthField Constant(float d) {
+    DepthField f;
     f.width = f.height = 4;
     f.depth.assign(16, d);
     f.name = "c";
@@ -16,7 +16,7 @@ HeightField Constant(float d) {
 }  // namespace
 
 TEST(Summary, PaperMseOverCoveredPixelsOnly) {
-    HeightField f = Constant(0.5f);
+    DepthField f = Constant(0.5f);
     FrameRecord r;
     r.Resize(4, 2);
     // two covered pixels with errors +0.25 and -0.125, one uncovered with garbage

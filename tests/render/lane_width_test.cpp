@@ -73,10 +73,10 @@ uint64_t OracleCost(const FrameRecord& r, const std::vector<int>& tri, int bw, i
 }  // namespace
 
 TEST(LaneWidth, EveryWidthRendersTheSameFrame) {
-    const HeightField noise = MakeBuiltinMap("noise", 64, 64);
-    const HeightField steps = MakeBuiltinMap("steps", 48, 48);  // not a power of two
+    const DepthField noise = MakeBuiltinMap("noise", 64, 64);
+    const DepthField steps = MakeBuiltinMap("steps", 48, 48);  // not a power of two
     struct Variant {
-        const HeightField* map;
+        const DepthField* map;
         Filter filter;
         WrapMode wrap;
         std::vector<std::string> set;
@@ -118,7 +118,7 @@ TEST(LaneWidth, EveryWidthRendersTheSameFrame) {
 }
 
 TEST(LaneWidth, ExecutedLaneCostMatchesTheGroupOracle) {
-    const HeightField field = MakeBuiltinMap("shapes", 128, 128);
+    const DepthField field = MakeBuiltinMap("shapes", 128, 128);
     for (float angle : {0.0f, 40.0f, 70.0f}) {
         RenderSettings s;
         s.width = 150;
@@ -187,7 +187,7 @@ std::vector<glm::vec2> SamplerProbes(int w, int h) {
 // arithmetic, on power-of-two and other sizes.
 TEST(LaneSampler, EqualsScalarSamplerAtEveryWidth) {
     for (auto [w, h] : {std::pair{64, 64}, {37, 23}, {1, 1}, {2, 5}}) {
-        const HeightField field = QuantizeToUnorm8(MakeBuiltinMap("noise", w, h));
+        const DepthField field = QuantizeToUnorm8(MakeBuiltinMap("noise", w, h));
         const std::vector<glm::vec2> probes = SamplerProbes(w, h);
         std::vector<float> u, v;
         for (glm::vec2 p : probes) u.push_back(p.x), v.push_back(p.y);

@@ -42,7 +42,7 @@ TEST(ImageIo, Grey8BitHeightBecomesDepth) {
     fs::path d = TempDir();
     std::string path = (d / "g.png").string();
     WriteWithOiio<uint8_t>(path, 2, 1, 1, OIIO::TypeDesc::UINT8, {255, 51});
-    HeightField f = LoadHeightMap(path, {});
+    DepthField f = LoadHeightMap(path, {});
     ASSERT_EQ(f.width, 2);
     EXPECT_EQ(f.At(0, 0), 0.0f);  // white = top
     EXPECT_EQ(f.At(1, 0), Unorm8ToFloat(204));
@@ -68,12 +68,12 @@ TEST(ImageIo, SixteenBitAndFloat) {
     fs::path d = TempDir();
     std::string p16 = (d / "h.png").string();
     WriteWithOiio<uint16_t>(p16, 1, 1, 1, OIIO::TypeDesc::UINT16, {65535});
-    HeightField f16 = LoadHeightMap(p16, {});
+    DepthField f16 = LoadHeightMap(p16, {});
     EXPECT_EQ(f16.At(0, 0), 0.0f);
     EXPECT_TRUE(f16.depth8.empty());
     std::string pf = (d / "f.exr").string();
     WriteWithOiio<float>(pf, 2, 1, 1, OIIO::TypeDesc::FLOAT, {0.25f, 1.0f});
-    HeightField ff = LoadHeightMap(pf, {});
+    DepthField ff = LoadHeightMap(pf, {});
     EXPECT_EQ(ff.At(0, 0), 0.75f);
     EXPECT_EQ(ff.At(1, 0), 0.0f);
 }
@@ -127,9 +127,9 @@ TEST(ImageIo, ChannelBeyondImageIsAnError) {
 }
 
 TEST(ImageIo, EmptyFieldIsRejected) {
-    HeightField f;
+    DepthField f;
     f.name = "empty";
-    EXPECT_THROW(ValidateHeightField(f), Error);
+    EXPECT_THROW(ValidateDepthField(f), Error);
 }
 
 namespace {

@@ -9,24 +9,24 @@ using namespace reliefsim;
 
 TEST(Procedural, EveryBuiltinIsInRangeAndDeterministic) {
     for (const std::string& name : BuiltinMapNames()) {
-        HeightField a = MakeBuiltinMap(name, 64, 48);
-        HeightField b = MakeBuiltinMap(name, 64, 48);
+        DepthField a = MakeBuiltinMap(name, 64, 48);
+        DepthField b = MakeBuiltinMap(name, 64, 48);
         ASSERT_EQ(a.depth.size(), 64u * 48u) << name;
         EXPECT_EQ(a.depth, b.depth) << name;
-        EXPECT_NO_THROW(ValidateHeightField(a)) << name;
+        EXPECT_NO_THROW(ValidateDepthField(a)) << name;
     }
 }
 
 TEST(Procedural, DefaultSizeAndSpecParsing) {
-    HeightField d = MakeBuiltinMap("builtin:shapes");
+    DepthField d = MakeBuiltinMap("builtin:shapes");
     EXPECT_EQ(d.width, kDefaultBuiltinSize);
-    HeightField s = MakeBuiltinMap("builtin:noise:100");
+    DepthField s = MakeBuiltinMap("builtin:noise:100");
     EXPECT_EQ(s.width, 100);
     EXPECT_EQ(s.height, 100);
 }
 
 TEST(Procedural, ShapesHasTopAndFloorAndSteps) {
-    HeightField f = MakeBuiltinMap("shapes", 256, 256);
+    DepthField f = MakeBuiltinMap("shapes", 256, 256);
     float lo = 1, hi = 0;
     for (float d : f.depth) {
         lo = std::min(lo, d);
@@ -37,9 +37,9 @@ TEST(Procedural, ShapesHasTopAndFloorAndSteps) {
 }
 
 TEST(Procedural, AnalyticFieldsHaveClosedForms) {
-    HeightField flat = MakeBuiltinMap("flat", 8, 8);
+    DepthField flat = MakeBuiltinMap("flat", 8, 8);
     for (float d : flat.depth) EXPECT_EQ(d, 0.5f);
-    HeightField ramp = MakeBuiltinMap("ramp", 8, 2);
+    DepthField ramp = MakeBuiltinMap("ramp", 8, 2);
     EXPECT_FLOAT_EQ(ramp.At(3, 1), 3.5f / 8.0f);
 }
 

@@ -11,14 +11,14 @@
 namespace reliefsim {
 namespace {
 
-HeightField Field8(int w, int h, uint32_t seed) {
+DepthField Field8(int w, int h, uint32_t seed) {
     std::vector<uint8_t> d(size_t(w) * size_t(h));
     uint32_t x = seed;
     for (auto& v : d) {
         x = x * 1664525u + 1013904223u;
         v = uint8_t(x >> 24);
     }
-    return HeightFieldFromUnorm8(w, h, std::move(d), "test8");
+    return DepthFieldFromUnorm8(w, h, std::move(d), "test8");
 }
 
 TEST(SamplerPrecision, DefaultsToFloatAndParses) {
@@ -39,7 +39,7 @@ TEST(SamplerPrecision, Lerp8IsFloorOfRoundedProduct) {
 }
 
 TEST(SamplerPrecision, Llvmpipe8ReturnsTexelsAtCentresAndHalfAtMidpoints) {
-    HeightField f = HeightFieldFromUnorm8(4, 1, {0, 255, 10, 20}, "row");
+    DepthField f = DepthFieldFromUnorm8(4, 1, {0, 255, 10, 20}, "row");
     FetchCounts counts;
     CountingSampler s(f, {Filter::Bilinear, WrapMode::Clamp, Precision::Llvmpipe8},
                       &counts);
@@ -53,7 +53,7 @@ TEST(SamplerPrecision, Llvmpipe8ReturnsTexelsAtCentresAndHalfAtMidpoints) {
 }
 
 TEST(SamplerPrecision, Llvmpipe8ResultsAreEightBitAndNearTheFloatModel) {
-    HeightField f = Field8(16, 8, 7);
+    DepthField f = Field8(16, 8, 7);
     for (WrapMode wrap : {WrapMode::Repeat, WrapMode::Clamp}) {
         Sampler<false> fixed(f, {Filter::Bilinear, wrap, Precision::Llvmpipe8});
         Sampler<false> exact(f, {Filter::Bilinear, wrap, Precision::Float});
@@ -78,7 +78,7 @@ TEST(SamplerPrecision, Llvmpipe8ResultsAreEightBitAndNearTheFloatModel) {
 }
 
 TEST(SamplerPrecision, Llvmpipe8NonPowerOfTwoRepeatWraps) {
-    HeightField f = Field8(7, 5, 3);
+    DepthField f = Field8(7, 5, 3);
     Sampler<false> s(f, {Filter::Bilinear, WrapMode::Repeat, Precision::Llvmpipe8});
     // One period apart, the same footprint and weights.
     for (float u : {0.01f, 0.33f, 0.97f})
@@ -87,7 +87,7 @@ TEST(SamplerPrecision, Llvmpipe8NonPowerOfTwoRepeatWraps) {
 }
 
 TEST(SamplerPrecision, Gpu8RoundsWeightsToSubtexelSteps) {
-    HeightField f = HeightFieldFromUnorm8(2, 1, {0, 255}, "pair");
+    DepthField f = DepthFieldFromUnorm8(2, 1, {0, 255}, "pair");
     Sampler<false> gpu(f, {Filter::Bilinear, WrapMode::Clamp, Precision::Gpu8});
     Sampler<false> flt(f, {Filter::Bilinear, WrapMode::Clamp, Precision::Float});
     // u = 0.25 + 0.3/2 puts weight 0.3 on texel 1 (c = 0.8 - 0.5 = 0.3, up to rounding).
@@ -103,7 +103,7 @@ TEST(SamplerPrecision, Gpu8RoundsWeightsToSubtexelSteps) {
 }
 
 TEST(SamplerPrecision, NearestAndMin4IgnorePrecision) {
-    HeightField f = Field8(8, 8, 11);
+    DepthField f = Field8(8, 8, 11);
     for (Filter filter : {Filter::Nearest, Filter::Min4}) {
         Sampler<false> a(f, {filter, WrapMode::Repeat, Precision::Float});
         Sampler<false> b(f, {filter, WrapMode::Repeat, Precision::Llvmpipe8});

@@ -1,4 +1,4 @@
-// HeightField: an immutable single-channel depth texture, the input of every kernel.
+// DepthField: an immutable single-channel depth texture, the input of every kernel.
 #pragma once
 
 #include <cstdint>
@@ -12,7 +12,7 @@ namespace reliefsim {
 /// (j+0.5)/H). Row j = 0 is the first row of the source image (its top row) and sits at v
 /// in [0, 1/H): exactly what an OpenGL upload of the same array gives, so both paths see
 /// the same texels.
-struct HeightField {
+struct DepthField {
     int width = 0, height = 0;
     std::vector<float> depth;  ///< W*H depths in [0,1]
     /// Set when the source had 8-bit channels: the depth as 8-bit unorm (depth = d8 / 255
@@ -29,15 +29,15 @@ struct HeightField {
 /// 255.0f, which differs by 1 ulp for some v; research/llvmpipe.md §2.1).
 inline float Unorm8ToFloat(uint8_t v) { return float(v) * float(1.0 / 255.0); }
 
-/// Builds a HeightField from 8-bit depths (keeps depth8 and derives depth).
-HeightField HeightFieldFromUnorm8(int width, int height, std::vector<uint8_t> depth8,
-                                  std::string name);
+/// Builds a DepthField from 8-bit depths (keeps depth8 and derives depth).
+DepthField DepthFieldFromUnorm8(int width, int height, std::vector<uint8_t> depth8,
+                                std::string name);
 
 /// Quantises a float field to 8 bits (round to nearest), keeping depth8.
-HeightField QuantizeToUnorm8(const HeightField& hf);
+DepthField QuantizeToUnorm8(const DepthField& hf);
 
 /// Throws Error naming hf.name when the field is empty or holds NaN/Inf or values outside
 /// [0,1].
-void ValidateHeightField(const HeightField& hf);
+void ValidateDepthField(const DepthField& hf);
 
 }  // namespace reliefsim

@@ -1,5 +1,5 @@
-// HeightField construction and validation.
-#include "texture/height_field.h"
+// DepthField construction and validation.
+#include "texture/depth_field.h"
 
 #include <cmath>
 #include <sstream>
@@ -8,9 +8,9 @@
 
 namespace reliefsim {
 
-HeightField HeightFieldFromUnorm8(int width, int height, std::vector<uint8_t> depth8,
-                                  std::string name) {
-    HeightField hf;
+DepthField DepthFieldFromUnorm8(int width, int height, std::vector<uint8_t> depth8,
+                                std::string name) {
+    DepthField hf;
     hf.width = width;
     hf.height = height;
     hf.name = std::move(name);
@@ -20,15 +20,14 @@ HeightField HeightFieldFromUnorm8(int width, int height, std::vector<uint8_t> de
     return hf;
 }
 
-HeightField QuantizeToUnorm8(const HeightField& hf) {
+DepthField QuantizeToUnorm8(const DepthField& hf) {
     std::vector<uint8_t> d8(hf.depth.size());
     for (size_t k = 0; k < d8.size(); ++k)
         d8[k] = uint8_t(std::lround(double(hf.depth[k]) * 255.0));
-    return HeightFieldFromUnorm8(hf.width, hf.height, std::move(d8),
-                                 hf.name + " (8-bit)");
+    return DepthFieldFromUnorm8(hf.width, hf.height, std::move(d8), hf.name + " (8-bit)");
 }
 
-void ValidateHeightField(const HeightField& hf) {
+void ValidateDepthField(const DepthField& hf) {
     if (hf.Empty())
         throw Error("height map \"" + hf.name + "\": has zero size (" +
                     std::to_string(hf.width) + "x" + std::to_string(hf.height) + ")");
