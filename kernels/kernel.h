@@ -14,11 +14,12 @@
 //                                        typename L::M active, Fetch<L>& next);
 //   template <class L> static void End(const Params&, const LaneRay<L>&, const State<L>&,
 //                                      LaneOutcome<L>&);
-// Begin names the first fetch of every lane. The driver (render/fragment_driver.h) then
+// Begin sets every field of State (the driver reuses a pack's State without clearing
+// it) and names the first fetch of every lane. The driver (render/lane_driver.h) then
 // runs trips: one fetch per active lane, then Step, which consumes the sample and returns
 // the lanes that want another fetch (naming it in `next`). Before every fetch the driver
-// applies the fetch budget; a lane refused a fetch stops with its state as it is, so Step
-// keeps in State the answer to return if the lane stopped there. The GLSL twin is the
+// applies the fetch budget; a lane refused a fetch stops with its state as it is, so End
+// must answer from State what the lane returns if it stopped there. The GLSL twin is the
 // same step in a do-while loop (kernels/glsl/).
 #pragma once
 
