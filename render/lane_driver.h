@@ -233,6 +233,31 @@ void RunBatch(const BatchJob& job, LaneBatch& b) {
     });
 }
 
+/// kPacks packs' dependent chains from u0, v0 interleaved (kPacks a constant, so the
+/// packs' registers need no array in memory); adds to sum and texels.
+template <class L, bool kCount, int kPacks>
+RS_INLINE void ChainPacks(const LaneTextures& tex, const float* u0, const float* v0,
+                          int chain, typename L::F& sum, double& texels) {
+    using F = typename L::F;
+    constexpr int N = L::kWidth;
+    const typename L::M all(true);
+    F u[kPacks], v[kPacks], reads[kPacks];
+    for (int j = 0; j < kPacks; ++j) {
+        u[j].copy_from(u0 + j * N, stdx::element_aligned);
+        v[j].copy_from(v0 + j * N, stdx::element_aligned);
+        reads[j] = F(0.0f);
+    }
+    for (int k = 0; k < chain; ++k) {
+        for (int j = 0; j < kPacks; ++j) {
+            const F h = SampleHeightLanes<L, kCount>(tex, u[j], v[j], all, reads[j]);
+            u[j] = u[j] + h * F(0.01f) + F(0.0031f);
+            v[j] = v[j] + F(0.0017f);
+            sum = sum + h;
+        }
+    }
+    for (int j = 0; j < kPacks; ++j) texels += double(stdx::reduce(reads[j]));
+}
+
 /// SampleChainFn of one lane width: kPacksInFlight packs' chains interleaved, as the
 /// driver runs packs; kCount = false is the uncounted baseline.
 template <class L, bool kCount>
@@ -243,24 +268,13 @@ float SampleChainCounted(const Textures& textures, const float* u0, const float*
     constexpr int N = L::kWidth, P = kPacksInFlight;
     F sum(0.0f);
     double texels = 0.0;
-    const typename L::M all(true);
     for (int base = 0; base + N <= n; base += N * P) {
-        F u[P], v[P], reads[P];
-        const int packs = std::min(P, (n - base) / N);
-        for (int j = 0; j < packs; ++j) {
-            u[j].copy_from(u0 + base + j * N, stdx::element_aligned);
-            v[j].copy_from(v0 + base + j * N, stdx::element_aligned);
-            reads[j] = F(0.0f);
-        }
-        for (int k = 0; k < chain; ++k) {
-            for (int j = 0; j < packs; ++j) {
-                const F h = SampleHeightLanes<L, kCount>(tex, u[j], v[j], all, reads[j]);
-                u[j] = u[j] + h * F(0.01f) + F(0.0031f);
-                v[j] = v[j] + F(0.0017f);
-                sum = sum + h;
-            }
-        }
-        for (int j = 0; j < packs; ++j) texels += double(stdx::reduce(reads[j]));
+        const float *u = u0 + base, *v = v0 + base;
+        if ((n - base) / N >= P)
+            ChainPacks<L, kCount, P>(tex, u, v, chain, sum, texels);
+        else
+            for (int j = 0; j < (n - base) / N; ++j)
+                ChainPacks<L, kCount, 1>(tex, u + j * N, v + j * N, chain, sum, texels);
     }
     if constexpr (kCount) *texelReads += uint64_t(texels);
     return stdx::reduce(sum);
