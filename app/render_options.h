@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "app/commands.h"
-#include "app/pipeline.h"
+#include "render/frame.h"
 
 namespace reliefsim {
 

@@ -14,9 +14,9 @@
 #include <tuple>
 #include <vector>
 
-#include "app/pipeline.h"
 #include "core/error.h"
 #include "maps/mip_pyramid.h"
+#include "render/frame.h"
 #include "tests/app/cli_util.h"
 #include "tests/common/test_files.h"
 #include "texture/procedural.h"

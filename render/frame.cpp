@@ -1,6 +1,6 @@
-// The render pipeline: scene set-up, the fragment program running a kernel per lane,
+// The frame driver: scene set-up, the fragment program running a kernel per lane,
 // outputs.
-#include "app/pipeline.h"
+#include "render/frame.h"
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/global_control.h>

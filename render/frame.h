@@ -1,4 +1,4 @@
-// The render pipeline: scene set-up, the fragment program running a kernel per lane,
+// The frame driver: scene set-up, the fragment program running a kernel per lane,
 // outputs.
 #pragma once
 

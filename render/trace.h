@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "app/pipeline.h"
+#include "render/frame.h"
 
 namespace reliefsim {
 
