@@ -4,7 +4,7 @@
 #include "app/commands.h"
 #include "app/render_options.h"
 #include "core/error.h"
-#include "render/frame.h"
+#include "render/outputs.h"
 
 namespace reliefsim {
 

@@ -1,5 +1,7 @@
 // Outputs of `render` and `maps`: all or nothing (a failed run leaves the output location
 // exactly as it was), folders as the umask says, byte-identical reruns and thread counts.
+#include "render/outputs.h"
+
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
@@ -16,7 +18,6 @@
 
 #include "core/error.h"
 #include "maps/mip_pyramid.h"
-#include "render/frame.h"
 #include "tests/app/cli_util.h"
 #include "tests/common/test_files.h"
 #include "texture/procedural.h"

@@ -5,7 +5,7 @@
 #include <fstream>
 
 #include "core/error.h"
-#include "render/frame.h"
+#include "render/outputs.h"
 #include "render/trace.h"
 #include "texture/procedural.h"
 
