@@ -8,13 +8,13 @@
 
 #include "app/commands.h"
 #include "app/glcompare.h"
-#include "app/trace.h"
 #include "core/error.h"
 #include "metrics/heatmap.h"
 #include "raster/camera.h"
 #include "raster/rasterizer.h"
 #include "raster/viewport_pieces.h"
 #include "render/batch.h"
+#include "render/trace.h"
 
 namespace reliefsim {
 

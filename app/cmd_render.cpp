@@ -2,9 +2,9 @@
 #include <iostream>
 
 #include "app/commands.h"
-#include "app/pipeline.h"
 #include "app/render_options.h"
 #include "core/error.h"
+#include "render/outputs.h"
 
 namespace reliefsim {
 

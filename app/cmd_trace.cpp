@@ -4,8 +4,8 @@
 
 #include "app/commands.h"
 #include "app/render_options.h"
-#include "app/trace.h"
 #include "core/error.h"
+#include "render/trace.h"
 
 namespace reliefsim {
 

@@ -6,10 +6,10 @@
 #include <string>
 #include <vector>
 
-#include "app/pipeline.h"
 #include "app/render_options.h"
 #include "glref/gl_reference.h"
 #include "metrics/record_compare.h"
+#include "render/frame.h"
 
 namespace reliefsim {
 

@@ -8,7 +8,8 @@
 #include <vector>
 
 #include "app/commands.h"
-#include "app/pipeline.h"
+#include "render/scene.h"
+#include "texture/depth_field.h"
 
 namespace reliefsim {
 

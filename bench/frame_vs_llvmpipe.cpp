@@ -22,6 +22,7 @@
 #include "app/glcompare.h"
 #include "core/error.h"
 #include "metrics/record_compare.h"
+#include "render/frame.h"
 
 namespace {
 

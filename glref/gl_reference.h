@@ -14,8 +14,8 @@
 
 #include "core/record.h"
 #include "kernels/registry.h"
-#include "kernels/view_ray.h"
 #include "raster/mesh.h"
+#include "render/view_ray.h"
 #include "texture/depth_field.h"
 #include "texture/sampler.h"
 

@@ -1,4 +1,5 @@
-// Triangle meshes with a tangent frame per vertex, and the built-in test surfaces.
+// Triangle meshes with a tangent frame per vertex (the scene's plane is render/scene.h
+// MakePlane).
 #pragma once
 
 #include <cstdint>
@@ -23,12 +24,5 @@ struct Mesh {
     std::vector<Vertex> vertices;
     std::vector<uint32_t> indices;
 };
-
-/// The scene's plane, defined once (render, trace, glcompare and the benchmarks draw it):
-/// the world square [-0.5,0.5]^2 in the z = 0 plane, two triangles, normal +z, tangent +x
-/// (u), bitangent -y (v), uv = (x + 0.5, 0.5 - y) * tiling, so texel row 0 (the image's
-/// top row) lies on the far edge (+y) for azimuth 0 (kernels/view_ray.h PixelToRay
-/// assumes exactly this plane).
-Mesh MakePlane(float tiling);
 
 }  // namespace reliefsim

@@ -14,7 +14,7 @@
 #include <string>
 
 #include "kernels/registry.h"
-#include "kernels/view_ray.h"
+#include "render/view_ray.h"
 #include "texture/lane_sampler.h"
 
 namespace reliefsim {

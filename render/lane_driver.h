@@ -20,30 +20,6 @@
 
 namespace reliefsim::detail {
 
-/// PixelToRay (kernels/view_ray.h) on lanes: the same operations in the same order.
-template <class L>
-RS_INLINE LaneRay<L> PixelToRayLanes(const ViewUniforms& u, const typename L::F& px,
-                                     const typename L::F& py) {
-    using F = typename L::F;
-    const F fx = px + F(0.5f), fy = py + F(0.5f);
-    const F ndcX = (fx * F(2.0f)) / F(u.width) - F(1.0f);
-    const F ndcY = F(1.0f) - (fy * F(2.0f)) / F(u.height);
-    const F dx = (F(u.forward.x) + F(u.right.x) * ndcX) + F(u.up.x) * ndcY;
-    const F dy = (F(u.forward.y) + F(u.right.y) * ndcX) + F(u.up.y) * ndcY;
-    F dz = (F(u.forward.z) + F(u.right.z) * ndcX) + F(u.up.z) * ndcY;
-    dz = Select(dz < F(-1e-6f), dz, F(-1e-6f));
-    const F tPlane = F(-u.eye.z) / dz;
-    const F hitX = F(u.eye.x) + dx * tPlane;
-    const F hitY = F(u.eye.y) + dy * tPlane;
-    const F k(u.depthScale * u.tiling);
-    LaneRay<L> r;
-    r.uEntry = (hitX + F(0.5f)) * F(u.tiling);
-    r.vEntry = (F(0.5f) - hitY) * F(u.tiling);
-    r.du = -(dx / dz) * k;
-    r.dv = (dy / dz) * k;
-    return r;
-}
-
 /// The shading of a hit (not part of the kernel's counts): Lambert with a normal from
 /// central differences of the height sampler (four uncounted fetches), albedo by depth,
 /// magenta where the kernel found no hit (docs/architecture.md "Shading").

@@ -1,4 +1,4 @@
-// GLSL twin of kernels/view_ray.h PixelToRay: pixel -> texture-space view ray, the same float
+// GLSL twin of render/view_ray.h PixelToRay: pixel -> texture-space view ray, the same float
 // operations in the same order (no fma: llvmpipe lowers ffma to mul + add; DESIGN.md "The
 // GLSL twin"). Row 0 is the top of the image: the caller flips gl_FragCoord.y.
 

@@ -1,5 +1,7 @@
 // Outputs of `render` and `maps`: all or nothing (a failed run leaves the output location
 // exactly as it was), folders as the umask says, byte-identical reruns and thread counts.
+#include "render/outputs.h"
+
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
@@ -14,7 +16,6 @@
 #include <tuple>
 #include <vector>
 
-#include "app/pipeline.h"
 #include "core/error.h"
 #include "maps/mip_pyramid.h"
 #include "tests/app/cli_util.h"

@@ -4,9 +4,9 @@
 #include <filesystem>
 #include <fstream>
 
-#include "app/pipeline.h"
-#include "app/trace.h"
 #include "core/error.h"
+#include "render/outputs.h"
+#include "render/trace.h"
 #include "texture/procedural.h"
 
 using namespace reliefsim;

@@ -5,8 +5,8 @@
 #include <cmath>
 
 #include "kernels/registry.h"
-#include "kernels/view_ray.h"
 #include "render/batch.h"
+#include "render/view_ray.h"
 #include "texture/procedural.h"
 #include "texture/sampler.h"
 

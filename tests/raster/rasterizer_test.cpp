@@ -13,6 +13,7 @@
 #include "core/error.h"
 #include "raster/camera.h"
 #include "raster/mesh.h"
+#include "render/scene.h"
 
 namespace reliefsim {
 namespace {

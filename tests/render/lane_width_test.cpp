@@ -6,11 +6,11 @@
 #include <cstring>
 #include <map>
 
-#include "app/pipeline.h"
 #include "raster/mesh.h"
 #include "raster/rasterizer.h"
 #include "raster/viewport_pieces.h"
 #include "render/batch.h"
+#include "render/frame.h"
 #include "texture/procedural.h"
 
 using namespace reliefsim;

@@ -1,5 +1,5 @@
 // Step-by-step trace of one pixel's kernel.
-#include "app/trace.h"
+#include "render/trace.h"
 
 #include <cmath>
 #include <cstdio>

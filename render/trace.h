@@ -4,7 +4,8 @@
 #include <string>
 #include <vector>
 
-#include "app/pipeline.h"
+#include "render/scene.h"
+#include "texture/depth_field.h"
 
 namespace reliefsim {
 

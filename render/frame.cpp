@@ -1,0 +1,212 @@
+// The frame driver: the rasterizer's fragment program, which runs the scene's kernel on
+// the lane driver, and the frame loop.
+#include "render/frame.h"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <chrono>
+#include <memory>
+#include <utility>
+
+#include "core/error.h"
+#include "core/memory.h"
+#include "raster/rasterizer.h"
+#include "render/batch.h"
+
+namespace reliefsim {
+
+uint64_t EstimateFrameBytes(int width, int height, uint64_t bytesPerPixel) {
+    constexpr uint64_t kBaseBytes = 64ull << 20;
+    return kBaseBytes +
+           bytesPerPixel * uint64_t(std::max(width, 0)) * uint64_t(std::max(height, 0));
+}
+
+void RequireFrameMemory(int width, int height, uint64_t bytesPerPixel) {
+    RequireMemory(EstimateFrameBytes(width, height, bytesPerPixel),
+                  "--size " + std::to_string(width) + "x" + std::to_string(height),
+                  "use a smaller --size");
+}
+
+namespace {
+
+struct TileTotals {
+    uint64_t helperLanes = 0, helperFetches = 0, helperTexelReads = 0;
+    LaneCosts laneCost;
+};
+
+// The fragment stage: quads are collected per triangle and tile, their rays computed, and
+// run through the fragment driver (render/batch.h) in packs of the lane width; results go
+// to the record, helper lanes to the tile's totals, and each (group, triangle) costs its
+// group's largest trip count times its lanes.
+class FrameProgram {
+  public:
+    static constexpr bool kReadsAttributes = false;  // rays come from PixelToRay
+
+    FrameProgram(const BatchJob& job, BatchFn run, FrameRecord& record,
+                 std::vector<float>& color, std::vector<TileTotals>& tiles)
+        : job_(job), run_(run), record_(record), color_(color), tiles_(tiles) {}
+
+    void ShadeQuad(const QuadFragment& q, int tileIndex) {
+        Scratch& s = scratch_.local();
+        s.quads.push_back({q.pixel0, q.coveredMask});
+        if (s.quads.size() == kMaxPending) Flush(s, tileIndex);
+    }
+
+    void EndTriangleInTile(int tileIndex) {
+        Scratch& s = scratch_.local();
+        Flush(s, tileIndex);
+        LaneCosts& c = tiles_[size_t(tileIndex)].laneCost;
+        for (uint32_t& m : s.group4x2) c.group4x2 += 8 * std::exchange(m, 0u);
+        for (uint32_t& m : s.warp32) c.warp32 += 32 * std::exchange(m, 0u);
+        for (uint32_t& m : s.wave64) c.wave64 += 64 * std::exchange(m, 0u);
+    }
+
+  private:
+    static constexpr size_t kMaxPending = 256;  // quads per batch
+    struct PendingQuad {
+        glm::ivec2 pixel0;
+        uint8_t coveredMask;
+    };
+    // Per thread: the pending quads of the tile it runs, the batch arrays, and the
+    // largest trip count of each group of the current (tile, triangle), indexed within
+    // the tile.
+    struct Scratch {
+        std::vector<PendingQuad> quads;
+        std::vector<int32_t> px, py;
+        std::vector<float> u, v, depth, rgb;
+        std::vector<uint16_t> nCoarse, nRefine;
+        std::vector<uint32_t> fetches, texels;
+        std::vector<uint8_t> flags;
+        std::vector<uint32_t> group4x2 = std::vector<uint32_t>((kTileSize / 4) *
+                                                               (kTileSize / 2)),
+                              warp32 = std::vector<uint32_t>((kTileSize / 8) *
+                                                             (kTileSize / 4)),
+                              wave64 = std::vector<uint32_t>((kTileSize / 8) *
+                                                             (kTileSize / 8));
+    };
+
+    void Flush(Scratch& s, int tileIndex) {
+        const size_t nQuads = s.quads.size();
+        if (nQuads == 0) return;
+        const size_t n = 4 * nQuads;
+        s.px.resize(n), s.py.resize(n), s.rgb.resize(3 * n);
+        s.u.resize(n), s.v.resize(n), s.depth.resize(n), s.nCoarse.resize(n);
+        s.nRefine.resize(n), s.fetches.resize(n), s.texels.resize(n), s.flags.resize(n);
+        for (size_t q = 0; q < nQuads; ++q) {
+            for (int k = 0; k < 4; ++k) {
+                s.px[4 * q + size_t(k)] = s.quads[q].pixel0.x + (k & 1);
+                s.py[4 * q + size_t(k)] = s.quads[q].pixel0.y + (k >> 1);
+            }
+        }
+        LaneBatch b;
+        b.n = int(n);
+        b.px = s.px.data(), b.py = s.py.data(), b.rgb = s.rgb.data();
+        b.u = s.u.data(), b.v = s.v.data(), b.depth = s.depth.data();
+        b.nCoarse = s.nCoarse.data(), b.nRefine = s.nRefine.data();
+        b.fetches = s.fetches.data(), b.texelReads = s.texels.data();
+        b.flags = s.flags.data();
+        run_(job_, b);
+
+        TileTotals& tile = tiles_[size_t(tileIndex)];
+        const int tilesX = TileCountX(record_.width);
+        const int tileX0 = (tileIndex % tilesX) * kTileSize;
+        const int tileY0 = (tileIndex / tilesX) * kTileSize;
+        for (size_t q = 0; q < nQuads; ++q) {
+            const PendingQuad& quad = s.quads[q];
+            uint32_t quadTrips = 0;
+            for (int k = 0; k < 4; ++k) {
+                const size_t i = 4 * q + size_t(k);
+                const int px = quad.pixel0.x + (k & 1), py = quad.pixel0.y + (k >> 1);
+                if (!((quad.coveredMask >> k) & 1u)) {
+                    ++tile.helperLanes;
+                    tile.helperFetches += s.fetches[i];
+                    tile.helperTexelReads += s.texels[i];
+                    continue;
+                }
+                quadTrips = std::max(quadTrips, s.fetches[i]);  // one fetch per trip
+                const size_t r = record_.Index(px, py);
+                record_.hitU[r] = s.u[i];
+                record_.hitV[r] = s.v[i];
+                record_.hitDepth[r] = s.depth[i];
+                record_.nCoarse[r] = s.nCoarse[i];
+                record_.nRefine[r] = s.nRefine[i];
+                record_.nFetches[r] = s.fetches[i];
+                record_.nTexelReads[r] = s.texels[i];
+                record_.flags[r] = uint8_t(kFlagCovered | s.flags[i]);
+                for (int c = 0; c < 3; ++c)
+                    color_[3 * r + size_t(c)] = s.rgb[3 * i + size_t(c)];
+            }
+            // A lane leaves the loop for good, so a group runs as many trips as its
+            // longest-running covered lane.
+            tile.laneCost.quad += 4 * uint64_t(quadTrips);
+            const int lx = quad.pixel0.x - tileX0, ly = quad.pixel0.y - tileY0;
+            uint32_t& g = s.group4x2[size_t((ly / 2) * (kTileSize / 4) + lx / 4)];
+            uint32_t& w = s.warp32[size_t((ly / 4) * (kTileSize / 8) + lx / 8)];
+            uint32_t& v = s.wave64[size_t((ly / 8) * (kTileSize / 8) + lx / 8)];
+            g = std::max(g, quadTrips);
+            w = std::max(w, quadTrips);
+            v = std::max(v, quadTrips);
+        }
+        s.quads.clear();
+    }
+
+    const BatchJob& job_;
+    BatchFn run_;
+    FrameRecord& record_;
+    std::vector<float>& color_;
+    std::vector<TileTotals>& tiles_;
+    tbb::enumerable_thread_specific<Scratch> scratch_;
+};
+
+}  // namespace
+
+RenderOutput Render(const DepthField& field, const RenderSettings& s) {
+    ValidateSettings(s);
+    ValidateDepthField(field);
+    RenderOutput out;
+    const Kernel kernel = SettingsKernel(s);
+    out.params = kernel.values;
+    const LaneWidthInfo& lanes = PickLaneWidth(s.lanes);
+    std::shared_ptr<const void> params;
+    BatchJob job = MakeBatchJob(kernel, BindTextures(field, s.sampler), params);
+
+    std::unique_ptr<tbb::global_control> limit;
+    if (s.threads > 0)
+        limit = std::make_unique<tbb::global_control>(
+            tbb::global_control::max_allowed_parallelism, size_t(s.threads));
+    out.lanes = lanes.width;
+    out.isa = lanes.isa;
+    out.threads = int(
+        tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+
+    out.record.Resize(s.width, s.height);
+    out.color.assign(size_t(s.width) * size_t(s.height) * 3, 0.0f);
+    std::vector<TileTotals> tiles(size_t(TileCount(s.width, s.height)));
+    const ViewUniforms uniforms = MakeViewUniforms(s);
+    const Camera camera = SceneCamera(s);
+    const Mesh mesh = MakePlane(s.tiling);
+    job.view = &uniforms;
+    job.slopeScale = s.depthScale * s.tiling;
+
+    auto start = std::chrono::steady_clock::now();
+    FrameProgram program(job, lanes.fn, out.record, out.color, tiles);
+    const RasterStats stats = RasterizeFrame(mesh, camera, s.width, s.height, program);
+    out.frameSeconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    out.nQuads = stats.nQuads;
+    for (const TileTotals& t : tiles) {  // tile-index order
+        out.record.nHelperLanes += t.helperLanes;
+        out.record.nHelperFetches += t.helperFetches;
+        out.record.nHelperTexelReads += t.helperTexelReads;
+        out.laneCost.quad += t.laneCost.quad;
+        out.laneCost.group4x2 += t.laneCost.group4x2;
+        out.laneCost.warp32 += t.laneCost.warp32;
+        out.laneCost.wave64 += t.laneCost.wave64;
+    }
+    out.summary = Summarize(out.record, field, s.sampler);
+    return out;
+}
+
+}  // namespace reliefsim

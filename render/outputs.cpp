@@ -1,0 +1,140 @@
+// The output files of a frame: metrics.json and the images and record of
+// WriteRenderOutputs.
+#include "render/outputs.h"
+
+#include <charconv>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+
+#include "core/error.h"
+#include "core/output_set.h"
+#include "metrics/heatmap.h"
+
+namespace reliefsim {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// A float setting as the shortest decimal that round-trips (0.1f prints as 0.1, not
+// 0.10000000149011612), so metrics.json reads like the command line that made it.
+double ShortestDouble(float f) {
+    char buf[32];
+    auto res = std::to_chars(buf, buf + sizeof buf, f);
+    return std::strtod(std::string(buf, res.ptr).c_str(), nullptr);
+}
+
+}  // namespace
+
+nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
+                           const DepthField& field) {
+    const FrameSummary& m = out.summary;
+    nlohmann::json params = nlohmann::json::object();
+    for (const auto& [k, v] : out.params) {
+        if (v == std::floor(v))
+            params[k] = int64_t(v);
+        else
+            params[k] = v;
+    }
+    nlohmann::json j;
+    j["method"] = s.method;
+    j["params"] = params;
+    j["map"] = field.name;
+    j["map_width"] = field.width;
+    j["map_height"] = field.height;
+    j["width"] = s.width;
+    j["height"] = s.height;
+    j["view_angle"] = ShortestDouble(s.viewAngle);
+    j["azimuth"] = ShortestDouble(s.azimuth);
+    j["distance"] = ShortestDouble(s.distance);
+    j["fov"] = ShortestDouble(s.fovY);
+    j["depth_scale"] = ShortestDouble(s.depthScale);
+    j["tiling"] = ShortestDouble(s.tiling);
+    j["filter"] = std::string(ToString(s.sampler.filter));
+    j["wrap"] = std::string(ToString(s.sampler.wrap));
+    j["covered_pixels"] = m.coveredPixels;
+    j["avg_iterations"] = m.avgIterations;
+    j["avg_coarse_iterations"] = m.avgCoarse;
+    j["avg_refine_iterations"] = m.avgRefine;
+    j["avg_fetches"] = m.avgFetches;
+    j["max_fetches"] = m.maxFetches;
+    j["total_fetches"] = m.totalFetches;
+    j["total_texel_reads"] = m.totalTexelReads;
+    j["budget_exhausted_pixels"] = m.budgetExhaustedPixels;
+    j["no_hit_pixels"] = m.noHitPixels;
+    j["mse_paper"] = m.msePaper;
+    j["sum_sq_error_paper"] = m.sumSqPaper;
+    j["max_abs_error_paper"] = m.maxAbsErrorPaper;
+    j["quads"] = out.nQuads;
+    j["helper_lanes"] = out.record.nHelperLanes;
+    j["helper_fetches"] = out.record.nHelperFetches;
+    j["helper_texel_reads"] = out.record.nHelperTexelReads;
+    j["lane_fetches_4x2"] = m.laneFetches4x2;
+    j["lane_fetches_8x4"] = m.laneFetches8x4;
+    j["heatmap_scale"] = {
+        {"iterations", {ShortestDouble(s.iterScaleMin), ShortestDouble(s.iterScaleMax)}},
+        {"fetches", {ShortestDouble(s.fetchScaleMin), ShortestDouble(s.fetchScaleMax)}}};
+    j["lane_cost_quad"] = out.laneCost.quad;
+    j["lane_cost_4x2"] = out.laneCost.group4x2;
+    j["lane_cost_warp32"] = out.laneCost.warp32;
+    j["lane_cost_wave64"] = out.laneCost.wave64;
+    j["timing"] = {{"frame_seconds", out.frameSeconds},
+                   {"threads", out.threads},
+                   {"lanes", out.lanes},
+                   {"isa", out.isa}};
+    return j;
+}
+
+void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
+                        const RenderSettings& s, const DepthField& field) {
+    if (outDir.empty()) throw Error("--out: empty; give a directory");
+    const fs::path dir(outDir);
+    std::error_code ec;
+    if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+        throw Error("--out \"" + outDir + "\": exists and is not a directory");
+    // All five files are staged as temporaries beside their destinations (or in the
+    // nearest existing ancestor while the folder does not exist) and replace what was
+    // there only once every one is complete, all or nothing (core/output_set.h). Every
+    // destination is checked before anything is written.
+    OutputSet outputs("--out \"" + outDir + "\"");
+    auto dest = [&](const char* name) { return (dir / name).string(); };
+    for (const char* name :
+         {"color.png", "iterations.png", "fetches.png", "record.exr", "metrics.json"})
+        outputs.Add(dest(name));
+    const FrameRecord& r = out.record;
+    const int w = r.width, h = r.height;
+    const size_t n = size_t(w) * size_t(h);
+    std::vector<uint8_t> mask(n);
+    std::vector<float> iters(n), fetches(n), coarse(n), refine(n), texels(n), flags(n),
+        err(n);
+    for (size_t i = 0; i < n; ++i) {
+        mask[i] = r.Covered(i) ? 1 : 0;
+        coarse[i] = float(r.nCoarse[i]);
+        refine[i] = float(r.nRefine[i]);
+        iters[i] = float(r.nCoarse[i] + r.nRefine[i]);
+        fetches[i] = float(r.nFetches[i]);
+        texels[i] = float(r.nTexelReads[i]);
+        flags[i] = float(r.flags[i]);
+        err[i] = PaperError(r, i, field, s.sampler);
+    }
+    WriteColorPng(dest("color.png"), out.color.data(), w, h, &outputs);
+    WriteHeatmapPng(dest("iterations.png"), iters.data(), mask.data(), w, h,
+                    {s.iterScaleMin, s.iterScaleMax, "inferno",
+                     "iterations (coarse + refine), " + s.method},
+                    &outputs);
+    WriteHeatmapPng(dest("fetches.png"), fetches.data(), mask.data(), w, h,
+                    {s.fetchScaleMin, s.fetchScaleMax, "inferno", "fetches, " + s.method},
+                    &outputs);
+    WriteMultiChannelExr(
+        dest("record.exr"), w, h,
+        {"hit_u", "hit_v", "hit_depth", "coarse_iterations", "refine_iterations",
+         "iterations", "fetches", "texel_reads", "flags", "error_paper"},
+        {r.hitU.data(), r.hitV.data(), r.hitDepth.data(), coarse.data(), refine.data(),
+         iters.data(), fetches.data(), texels.data(), flags.data(), err.data()},
+        &outputs);
+    outputs.Write(dest("metrics.json"), MetricsJson(out, s, field).dump(2) + "\n");
+    outputs.Commit();
+}
+
+}  // namespace reliefsim

@@ -1,0 +1,28 @@
+// The output files of a frame: metrics.json and the images and record of
+// WriteRenderOutputs.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "render/frame.h"
+
+namespace reliefsim {
+
+/// metrics.json content: the contract keys plus extras; timing fields only under
+/// "timing".
+nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& settings,
+                           const DepthField& field);
+
+/// Writes color.png, iterations.png, fetches.png, record.exr and metrics.json into
+/// outDir, all or nothing (core/output_set.h): every destination is checked first (a
+/// folder or other non-file standing where an output goes, a name too long: Error,
+/// nothing written), the files are written to temporaries and replace the previous
+/// outputs together; any failure restores what was there and removes the folders this
+/// call created. Files in outDir that are not outputs are never touched. Missing folders
+/// are created as mkdir does (mode 0777 & ~umask). Every file but metrics.json's "timing"
+/// is byte-identical for equal inputs and any thread count.
+void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
+                        const RenderSettings& settings, const DepthField& field);
+
+}  // namespace reliefsim

@@ -1,0 +1,97 @@
+// The scene: settings validation, the plane, the camera, its view uniforms and the
+// kernel.
+#include "render/scene.h"
+
+#include <cmath>
+#include <cstdio>
+
+#include "core/error.h"
+#include "render/batch.h"
+
+namespace reliefsim {
+
+void ValidateSettings(const RenderSettings& s) {
+    auto bad = [](const std::string& what) { throw Error(what); };
+    auto num = [](float v) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.9g", double(v));
+        return std::string(buf);
+    };
+    if (s.width < 1 || s.height < 1 || s.width > 16384 || s.height > 16384)
+        bad("--size " + std::to_string(s.width) + "x" + std::to_string(s.height) +
+            ": each side must be in [1, 16384]");
+    if (!(s.viewAngle >= 0.0f && s.viewAngle < 90.0f))
+        bad("--view-angle " + num(s.viewAngle) + ": must be in [0, 90) degrees");
+    if (!(std::fabs(s.azimuth) <= 1e6f))
+        bad("--azimuth " + num(s.azimuth) +
+            ": must be a finite angle in [-1e6, 1e6] degrees");
+    if (!(s.depthScale > 0.0f && s.depthScale <= kMaxDepthScale))
+        bad("--depth-scale " + num(s.depthScale) + ": must be in (0, " +
+            num(kMaxDepthScale) + "] plane widths");
+    if (!(s.tiling > 0.0f && s.tiling <= kMaxTiling))
+        bad("--tiling " + num(s.tiling) + ": must be in (0, " + num(kMaxTiling) + "]");
+    if (!(s.distance >= kMinDistance && s.distance <= kMaxDistance))
+        bad("--distance " + num(s.distance) + ": must be in [" + num(kMinDistance) +
+            ", " + num(kMaxDistance) + "] plane widths");
+    if (!(s.fovY > 0.0f && s.fovY < 180.0f))
+        bad("--fov " + num(s.fovY) + ": must be in (0, 180) degrees");
+    if (s.threads < 0 || s.threads > kMaxThreads)
+        bad("--threads " + std::to_string(s.threads) + ": must be in [0, " +
+            std::to_string(kMaxThreads) + "]");
+    if (!std::isfinite(s.iterScaleMin) || !std::isfinite(s.iterScaleMax) ||
+        !(s.iterScaleMax > s.iterScaleMin))
+        bad("--iterations-scale: MIN and MAX must be finite with MAX > MIN");
+    if (!std::isfinite(s.fetchScaleMin) || !std::isfinite(s.fetchScaleMax) ||
+        !(s.fetchScaleMax > s.fetchScaleMin))
+        bad("--fetches-scale: MIN and MAX must be finite with MAX > MIN");
+    ResolveParams(FindMethod(s.method), s.set);
+    PickLaneWidth(s.lanes);
+}
+
+Mesh MakePlane(float tiling) {
+    Mesh mesh;
+    const glm::vec2 corners[4] = {
+        {-0.5f, -0.5f}, {0.5f, -0.5f}, {0.5f, 0.5f}, {-0.5f, 0.5f}};
+    for (const glm::vec2& c : corners) {
+        Vertex v;
+        v.position = glm::vec3(c, 0.0f);
+        v.uv = glm::vec2((c.x + 0.5f) * tiling, (0.5f - c.y) * tiling);
+        v.tangent = glm::vec3(1.0f, 0.0f, 0.0f);
+        v.bitangent = glm::vec3(0.0f, -1.0f, 0.0f);
+        v.normal = glm::vec3(0.0f, 0.0f, 1.0f);
+        mesh.vertices.push_back(v);
+    }
+    mesh.indices = {0, 1, 2, 0, 2, 3};  // counter-clockwise seen from +z
+    return mesh;
+}
+
+Kernel SettingsKernel(const RenderSettings& s) {
+    const KernelInfo& method = FindMethod(s.method);
+    return MakeKernel(method, ResolveParams(method, s.set));
+}
+
+Camera SceneCamera(const RenderSettings& s) {
+    return MakeOrbitCamera(s.viewAngle, s.azimuth, s.distance, s.fovY,
+                           float(s.width) / float(s.height));
+}
+
+ViewUniforms MakeViewUniforms(const RenderSettings& s) {
+    Camera cam = SceneCamera(s);
+    const glm::mat4& v = cam.viewFromWorld;
+    const double tanY = std::tan(double(s.fovY) * 0.5 * 3.14159265358979323846 / 180.0);
+    const double tanX = tanY * double(s.width) / double(s.height);
+    ViewUniforms u;
+    u.eye = cam.eye;
+    u.right = glm::vec3(float(double(v[0][0]) * tanX), float(double(v[1][0]) * tanX),
+                        float(double(v[2][0]) * tanX));
+    u.up = glm::vec3(float(double(v[0][1]) * tanY), float(double(v[1][1]) * tanY),
+                     float(double(v[2][1]) * tanY));
+    u.forward = glm::vec3(-v[0][2], -v[1][2], -v[2][2]);
+    u.width = float(s.width);
+    u.height = float(s.height);
+    u.tiling = s.tiling;
+    u.depthScale = s.depthScale;
+    return u;
+}
+
+}  // namespace reliefsim

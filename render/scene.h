@@ -1,0 +1,64 @@
+// The scene, defined once: the textured plane, the orbit camera and its view uniforms,
+// and the kernel, all from RenderSettings. Render, trace, glcompare and the benchmarks
+// take their scene from here.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "kernels/registry.h"
+#include "raster/camera.h"
+#include "raster/mesh.h"
+#include "render/view_ray.h"
+#include "texture/sampler.h"
+
+namespace reliefsim {
+
+/// Most worker threads a run accepts (--threads).
+constexpr int kMaxThreads = 1024;
+
+/// Valid ranges of the scene settings beyond their natural bounds (so float arithmetic in
+/// the camera and rasterizer stays finite).
+constexpr float kMaxDepthScale = 100.0f;  ///< plane widths
+constexpr float kMaxTiling = 4096.0f;
+constexpr float kMinDistance = 0.01f, kMaxDistance = 1000.0f;  ///< plane widths
+
+/// Everything `reliefsim render` takes besides the map. Defaults are the documented ones.
+struct RenderSettings {
+    std::string method = "relief";
+    std::vector<std::string> set;  ///< "key=value" kernel parameters
+    int width = 512, height = 512;
+    float viewAngle = 45.0f;  ///< degrees from the plane normal, [0, 90)
+    float azimuth = 0.0f;     ///< degrees around the normal
+    float distance = 1.0f;    ///< camera distance from the plane centre, plane units
+    float fovY = 45.0f;       ///< vertical field of view, degrees
+    float depthScale = 0.1f;  ///< relief depth in plane units; > 0
+    float tiling = 1.0f;      ///< texture repeats across the plane; > 0
+    SamplerState sampler;     ///< height-map filter and wrap
+    int threads = 0;          ///< worker threads; 0 = all cores
+    int lanes = 0;            ///< fragment-driver lane width; 0 = the widest the CPU runs
+    float iterScaleMin = 0.0f, iterScaleMax = 64.0f;    ///< iterations heatmap scale
+    float fetchScaleMin = 0.0f, fetchScaleMax = 64.0f;  ///< fetches heatmap scale
+};
+
+/// Throws Error naming the first bad setting (size, angles, depth scale, tiling, threads,
+/// scales, method, parameters).
+void ValidateSettings(const RenderSettings& settings);
+
+/// The scene's plane: the world square [-0.5,0.5]^2 in the z = 0 plane, two triangles,
+/// normal +z, tangent +x (u), bitangent -y (v), uv = (x + 0.5, 0.5 - y) * tiling, so
+/// texel row 0 (the image's top row) lies on the far edge (+y) for azimuth 0. PixelToRay
+/// (render/view_ray.h) intersects exactly this plane.
+Mesh MakePlane(float tiling);
+
+/// The settings' method with its --set parameters resolved (defaults filled in): the one
+/// place render, trace and glcompare configure their kernel.
+Kernel SettingsKernel(const RenderSettings& settings);
+
+/// The settings' orbit camera, looking at the plane's centre.
+Camera SceneCamera(const RenderSettings& settings);
+
+/// The view uniforms of the settings' camera (shared by the C++ and GLSL paths).
+ViewUniforms MakeViewUniforms(const RenderSettings& settings);
+
+}  // namespace reliefsim
