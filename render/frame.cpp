@@ -113,34 +113,52 @@ class FrameProgram {
         const int tilesX = TileCountX(record_.width);
         const int tileX0 = (tileIndex % tilesX) * kTileSize;
         const int tileY0 = (tileIndex / tilesX) * kTileSize;
+        // The record's and the batch's arrays as plain pointers: through the vectors,
+        // every store reloaded every data pointer (measured: a fifth of Flush in perf).
+        float *hitU = record_.hitU.data(), *hitV = record_.hitV.data(),
+              *hitDepth = record_.hitDepth.data(), *color = color_.data();
+        uint16_t *nCoarse = record_.nCoarse.data(), *nRefine = record_.nRefine.data();
+        uint32_t *nFetches = record_.nFetches.data(),
+                 *nTexelReads = record_.nTexelReads.data();
+        uint8_t* flags = record_.flags.data();
+        const size_t width = size_t(record_.width);
+        // (The uint8_t stores may alias anything, so the batch's pointers are locals
+        // too.)
+        const float *bu = b.u, *bv = b.v, *bDepth = b.depth, *bRgb = b.rgb;
+        const uint16_t *bCoarse = b.nCoarse, *bRefine = b.nRefine;
+        const uint32_t *bFetches = b.fetches, *bTexels = b.texelReads;
+        const uint8_t* bFlags = b.flags;
+        uint64_t helperLanes = 0, helperFetches = 0, helperTexelReads = 0, quadCost = 0;
         for (size_t q = 0; q < nQuads; ++q) {
             const PendingQuad& quad = s.quads[q];
             uint32_t quadTrips = 0;
             for (int k = 0; k < 4; ++k) {
                 const size_t i = 4 * q + size_t(k);
-                const int px = quad.pixel0.x + (k & 1), py = quad.pixel0.y + (k >> 1);
+                const uint32_t fetches = bFetches[i];
                 if (!((quad.coveredMask >> k) & 1u)) {
-                    ++tile.helperLanes;
-                    tile.helperFetches += s.fetches[i];
-                    tile.helperTexelReads += s.texels[i];
+                    ++helperLanes;
+                    helperFetches += fetches;
+                    helperTexelReads += bTexels[i];
                     continue;
                 }
-                quadTrips = std::max(quadTrips, s.fetches[i]);  // one fetch per trip
-                const size_t r = record_.Index(px, py);
-                record_.hitU[r] = s.u[i];
-                record_.hitV[r] = s.v[i];
-                record_.hitDepth[r] = s.depth[i];
-                record_.nCoarse[r] = s.nCoarse[i];
-                record_.nRefine[r] = s.nRefine[i];
-                record_.nFetches[r] = s.fetches[i];
-                record_.nTexelReads[r] = s.texels[i];
-                record_.flags[r] = uint8_t(kFlagCovered | s.flags[i]);
+                quadTrips = std::max(quadTrips, fetches);  // one fetch per trip
+                const size_t px = size_t(quad.pixel0.x + (k & 1)),
+                             py = size_t(quad.pixel0.y + (k >> 1));
+                const size_t at = py * width + px;  // FrameRecord::Index
+                hitU[at] = bu[i];
+                hitV[at] = bv[i];
+                hitDepth[at] = bDepth[i];
+                nCoarse[at] = bCoarse[i];
+                nRefine[at] = bRefine[i];
+                nFetches[at] = fetches;
+                nTexelReads[at] = bTexels[i];
+                flags[at] = uint8_t(kFlagCovered | bFlags[i]);
                 for (int c = 0; c < 3; ++c)
-                    color_[3 * r + size_t(c)] = s.rgb[3 * i + size_t(c)];
+                    color[3 * at + size_t(c)] = bRgb[3 * i + size_t(c)];
             }
             // A lane leaves the loop for good, so a group runs as many trips as its
             // longest-running covered lane.
-            tile.laneCost.quad += 4 * uint64_t(quadTrips);
+            quadCost += 4 * uint64_t(quadTrips);
             const int lx = quad.pixel0.x - tileX0, ly = quad.pixel0.y - tileY0;
             uint32_t& g = s.group4x2[size_t((ly / 2) * (kTileSize / 4) + lx / 4)];
             uint32_t& w = s.warp32[size_t((ly / 4) * (kTileSize / 8) + lx / 8)];
@@ -149,6 +167,10 @@ class FrameProgram {
             w = std::max(w, quadTrips);
             v = std::max(v, quadTrips);
         }
+        tile.helperLanes += helperLanes;
+        tile.helperFetches += helperFetches;
+        tile.helperTexelReads += helperTexelReads;
+        tile.laneCost.quad += quadCost;
         s.quads.clear();
     }
 

@@ -31,13 +31,14 @@ RS_INLINE void ShadeHit(const LaneTextures& tex, float slopeScale, const typenam
     using F = typename L::F;
     const float du = 1.0f / float(tex.width), dv = 1.0f / float(tex.height);
     F unused(0.0f);
-    auto sample = [&](const F& su, const F& sv) {
-        return SampleHeightLanes<L>(tex, su, sv, active, unused);
-    };
-    const F ddu =
-        (sample(u + F(du), v + F(0.0f)) - sample(u - F(du), v - F(0.0f))) / F(2 * du);
-    const F ddv =
-        (sample(u + F(0.0f), v + F(dv)) - sample(u - F(0.0f), v - F(dv))) / F(2 * dv);
+    // (SampleHeightLanes called directly: through a lambda GCC kept the four fetches
+    // out of line.)
+    const F hu1 = SampleHeightLanes<L>(tex, u + F(du), v + F(0.0f), active, unused);
+    const F hu0 = SampleHeightLanes<L>(tex, u - F(du), v - F(0.0f), active, unused);
+    const F hv1 = SampleHeightLanes<L>(tex, u + F(0.0f), v + F(dv), active, unused);
+    const F hv0 = SampleHeightLanes<L>(tex, u - F(0.0f), v - F(dv), active, unused);
+    const F ddu = (hu1 - hu0) / F(2 * du);
+    const F ddv = (hv1 - hv0) / F(2 * dv);
     F nx = ddu * F(slopeScale), ny = ddv * F(slopeScale), nz(1.0f);
     const F inv = F(1.0f) / stdx::sqrt(nx * nx + ny * ny + nz * nz);
     nx = nx * inv, ny = ny * inv, nz = nz * inv;
