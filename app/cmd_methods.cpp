@@ -45,6 +45,14 @@ void RegisterMethodsCommand(CLI::App& root) {
                           << "\n";
             std::cout << "\n";
         }
+        if (*names)
+            std::cout << kExactMethod << "\n";
+        else
+            std::cout << kExactMethod
+                      << "  the exact first hit with the bilinear depth surface "
+                         "(the reference)\n    source: analytic, per bilinear cell "
+                         "(metrics/exact.h, docs/exact.md)\n    no parameters, no GLSL "
+                         "twin: render and trace compute it, glcompare does not\n\n";
     });
 }
 

@@ -35,6 +35,11 @@ const KernelInfo& FindMethod(std::string_view name) {
     std::string valid;
     for (const KernelInfo* m : Methods())
         valid += std::string(valid.empty() ? "" : ", ") + std::string(m->name);
+    valid += ", " + std::string(kExactMethod);
+    if (name == kExactMethod)
+        throw Error(
+            "--method exact: the exact reference is not a kernel; only render "
+            "and trace compute it");
     throw Error("--method \"" + std::string(name) +
                 "\": unknown; must be one of: " + valid);
 }

@@ -32,7 +32,14 @@ using ParamDef = ParamSpec;
 /// Every method, in catalogue order.
 std::span<const KernelInfo* const> Methods();
 
-/// The method named `name`; throws Error listing the valid names otherwise.
+/// The exact reference (metrics/exact.h): a method of `render` and `trace`, not a kernel
+/// (no lanes, no GLSL twin, no parameters). `reliefsim methods` lists it after the
+/// kernels.
+inline constexpr std::string_view kExactMethod = "exact";
+
+/// The method named `name`; throws Error listing the valid names (the kernels' and
+/// kExactMethod) otherwise. kExactMethod itself is not a kernel: callers test for it
+/// first.
 const KernelInfo& FindMethod(std::string_view name);
 
 /// Validates "key=value" settings against the method (unknown key, not a number, not an

@@ -12,8 +12,10 @@
 
 #include "core/error.h"
 #include "core/memory.h"
+#include "metrics/exact.h"
 #include "raster/rasterizer.h"
 #include "render/batch.h"
+#include "render/exact_batch.h"
 
 namespace reliefsim {
 
@@ -188,18 +190,28 @@ RenderOutput Render(const DepthField& field, const RenderSettings& s) {
     ValidateSettings(s);
     ValidateDepthField(field);
     RenderOutput out;
-    const Kernel kernel = SettingsKernel(s);
-    out.params = kernel.values;
     const LaneWidthInfo& lanes = PickLaneWidth(s.lanes);
     std::shared_ptr<const void> params;
-    BatchJob job = MakeBatchJob(kernel, BindTextures(field, s.sampler), params);
+    BatchJob job;
+    BatchFn run = lanes.fn;
+    std::unique_ptr<const ExactSurface> exact;
+    if (s.method == kExactMethod) {
+        exact = std::make_unique<const ExactSurface>(field, s.sampler.wrap);
+        job.textures = BindTextures(field, s.sampler);  // for the shading
+        job.params = exact.get();
+        run = &RunExactBatch;
+    } else {
+        const Kernel kernel = SettingsKernel(s);
+        out.params = kernel.values;
+        job = MakeBatchJob(kernel, BindTextures(field, s.sampler), params);
+    }
 
     std::unique_ptr<tbb::global_control> limit;
     if (s.threads > 0)
         limit = std::make_unique<tbb::global_control>(
             tbb::global_control::max_allowed_parallelism, size_t(s.threads));
-    out.lanes = lanes.width;
-    out.isa = lanes.isa;
+    out.lanes = exact ? 1 : lanes.width;
+    out.isa = exact ? "exact (double, one lane)" : lanes.isa;
     out.threads = int(
         tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
 
@@ -213,7 +225,7 @@ RenderOutput Render(const DepthField& field, const RenderSettings& s) {
     job.slopeScale = s.depthScale * s.tiling;
 
     auto start = std::chrono::steady_clock::now();
-    FrameProgram program(job, lanes.fn, out.record, out.color, tiles);
+    FrameProgram program(job, run, out.record, out.color, tiles);
     const RasterStats stats = RasterizeFrame(mesh, camera, s.width, s.height, program);
     out.frameSeconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -44,7 +44,15 @@ void ValidateSettings(const RenderSettings& s) {
     if (!std::isfinite(s.fetchScaleMin) || !std::isfinite(s.fetchScaleMax) ||
         !(s.fetchScaleMax > s.fetchScaleMin))
         bad("--fetches-scale: MIN and MAX must be finite with MAX > MIN");
-    ResolveParams(FindMethod(s.method), s.set);
+    if (s.method == kExactMethod) {
+        if (!s.set.empty())
+            bad("--set " + s.set.front() + ": method exact takes no parameters");
+        if (s.sampler.filter != Filter::Bilinear)
+            bad("--filter " + std::string(kFilterNames.Name(s.sampler.filter)) +
+                ": method exact intersects the bilinear surface; use --filter bilinear");
+    } else {
+        ResolveParams(FindMethod(s.method), s.set);
+    }
     PickLaneWidth(s.lanes);
 }
 

@@ -1,10 +1,12 @@
 // Step-by-step trace of one pixel's kernel.
 #include "render/trace.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
 #include "core/error.h"
+#include "metrics/exact.h"
 #include "raster/rasterizer.h"
 #include "render/batch.h"
 
@@ -16,13 +18,27 @@ PixelTrace TracePixel(const DepthField& field, const RenderSettings& s, int x, i
         throw Error("pixel " + std::to_string(x) + "," + std::to_string(y) +
                     ": outside the " + std::to_string(s.width) + "x" +
                     std::to_string(s.height) + " image");
-    const Kernel kernel = SettingsKernel(s);
-    std::shared_ptr<const void> params;
-    const BatchJob job = MakeBatchJob(kernel, BindTextures(field, s.sampler), params);
     PixelTrace trace;
     trace.x = x;
     trace.y = y;
     trace.input = PixelToRay(MakeViewUniforms(s), x, y);
+    if (s.method == kExactMethod) {
+        const ExactSurface surface(field, s.sampler.wrap);
+        detail::DenormalsAreZeroScope gpuFloatMode;  // as in the frame loop's tiles
+        const MarchInput& in = trace.input;
+        const ExactHit hit =
+            surface.FirstHit(in.uvEntry.x, in.uvEntry.y, in.dirUv.x, in.dirUv.y);
+        trace.exact = true;
+        trace.exactT = hit.t, trace.exactU = hit.u, trace.exactV = hit.v;
+        trace.result.uvHit = glm::vec2(float(hit.u), float(hit.v));
+        trace.result.depthHit = float(hit.t);
+        trace.result.nCoarse = uint16_t(std::min<uint32_t>(hit.cellsTested, 65535));
+        trace.result.hit = true;
+        return trace;
+    }
+    const Kernel kernel = SettingsKernel(s);
+    std::shared_ptr<const void> params;
+    const BatchJob job = MakeBatchJob(kernel, BindTextures(field, s.sampler), params);
     detail::DenormalsAreZeroScope gpuFloatMode;  // as in the frame loop's tiles
     const RayRun run = MarchRay(job, trace.input, [&](const TracedFetch& f) {
         trace.fetches.push_back({glm::vec2(f.u, f.v), f.t, f.sampled});
@@ -42,6 +58,14 @@ std::string FormatTrace(const PixelTrace& t) {
         t.x, t.y, double(t.input.uvEntry.x), double(t.input.uvEntry.y),
         double(t.input.dirUv.x), double(t.input.dirUv.y));
     s += line;
+    if (t.exact) {
+        std::snprintf(line, sizeof line,
+                      "exact first hit: t %.17g at uv (%.17g, %.17g); %u bilinear cells "
+                      "solved, no fetches\n",
+                      t.exactT, t.exactU, t.exactV, unsigned(t.result.nCoarse));
+        s += line;
+        return s;
+    }
     s += "  fetch          u            v    ray depth t  sampled depth\n";
     for (size_t k = 0; k < t.fetches.size(); ++k) {
         const TraceFetch& f = t.fetches[k];

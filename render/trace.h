@@ -21,6 +21,10 @@ struct PixelTrace {
     MarchResult result;
     FetchCounts counts;
     std::vector<TraceFetch> fetches;
+    /// Method exact (metrics/exact.h): no fetches; the hit in double and the cells whose
+    /// quadratic was solved (result holds the hit as the record stores it).
+    bool exact = false;
+    double exactT = 0.0, exactU = 0.0, exactV = 0.0;
 };
 
 /// Runs the settings' kernel for pixel (x, y) alone, recording every fetch. The kernel,

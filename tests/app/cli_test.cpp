@@ -149,3 +149,35 @@ TEST(Cli, BadSize) {
     ExpectCleanFailure("render --map builtin:shapes:32 --method relief --size 0x10",
                        "--size");
 }
+
+TEST(Cli, ExactMethodIsListedRenderedAndTraced) {
+    Result m = RunCli("methods --names", Scratch());
+    EXPECT_NE(m.out.find("exact\n"), std::string::npos);
+    fs::path d = Scratch();
+    Result r =
+        RunCli("render --map builtin:shapes:64 --method exact --size 64x48 --out " +
+                   (d / "o").string(),
+               d);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    for (const char* name :
+         {"color.png", "iterations.png", "fetches.png", "record.exr", "metrics.json"})
+        EXPECT_TRUE(fs::exists(d / "o" / name)) << name;
+    Result t = RunCli(
+        "trace --map builtin:shapes:64 --method exact --size 64x48 --pixel 30,20", d);
+    ASSERT_EQ(t.exitCode, 0) << t.err;
+    EXPECT_NE(t.out.find("exact first hit: t "), std::string::npos) << t.out;
+}
+
+TEST(Cli, ExactMethodRefusesWhatItCannotDo) {
+    ExpectCleanFailure(
+        "render --map builtin:shapes:32 --method exact --set linear_steps=8",
+        "method exact takes no parameters");
+    ExpectCleanFailure("render --map builtin:shapes:32 --method exact --filter nearest",
+                       "--filter nearest");
+    ExpectCleanFailure("render --map builtin:shapes:32 --method exact --filter min4",
+                       "--filter min4");
+    Result g = RunCli("glcompare --map builtin:shapes:32 --method exact", Scratch());
+    EXPECT_NE(g.exitCode, 0);
+    EXPECT_EQ(CountLines(g.err), 1) << g.err;
+    EXPECT_NE(g.err.find("not a kernel"), std::string::npos) << g.err;
+}

@@ -1,0 +1,234 @@
+// The exact reference: see metrics/exact.h and docs/exact.md.
+#include "metrics/exact.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "core/error.h"
+
+namespace reliefsim {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+int64_t FloorDiv(int64_t a, int64_t b) {  // floor(a / b), b > 0
+    const int64_t q = a / b;
+    return (a % b != 0 && a < 0) ? q - 1 : q;
+}
+
+int64_t Wrap(int64_t i, int64_t n) {
+    const int64_t r = i % n;
+    return r < 0 ? r + n : r;
+}
+
+/// A cell coordinate as an integer, for any double the walk produces (rays are bounded,
+/// so this only guards against an Inf reaching a conversion).
+int64_t FloorIndex(double x) {
+    constexpr double kLimit = 9.0e15;
+    return int64_t(std::floor(std::clamp(x, -kLimit, kLimit)));
+}
+
+}  // namespace
+
+/// The ray in the walk's cell coordinates X = u W - 0.5 + offset_, Y likewise (texel
+/// centres at integers, walk cell (i, j) is [i, i+1) x [j, j+1), the surface's cell
+/// (i - offset_, j - offset_)): X(t) = x0 + t dx.
+struct ExactSurface::Ray {
+    double x0, y0, dx, dy;
+    double X(double t) const { return x0 + t * dx; }
+    double Y(double t) const { return y0 + t * dy; }
+};
+
+/// The four corner depths of a cell.
+struct ExactSurface::Cell {
+    double d00, d10, d01, d11;
+};
+
+ExactSurface::ExactSurface(const DepthField& field, WrapMode wrap)
+    : width_(field.width), height_(field.height), wrap_(wrap) {
+    ValidateDepthField(field);
+    depth_.assign(field.depth.begin(), field.depth.end());
+    // Level 0: each cell's least corner; level l + 1: the least of 2 x 2 blocks of level l.
+    // Repeat: the W x H cells of one period, halved while both sides stay even (so no
+    // block straddles the texture's edge). Clamp: the cells -1 .. W-1 (-1 .. H-1), the
+    // only distinct ones (cell i <= -1 equals cell -1, i >= W-1 equals W-1), stored from
+    // index 0 (offset_ = 1) and padded with copies of the last to a multiple of the top
+    // block size, at most 256 cells; a block past the edges takes the edge block's minimum,
+    // which covers the same (repeated) cells.
+    int w = width_, h = height_, levels = 0;
+    if (wrap == WrapMode::Repeat) {
+        while (((w >> levels) % 2 == 0) && ((h >> levels) % 2 == 0)) ++levels;
+    } else {
+        offset_ = 1;
+        const int cells = std::max(width_, height_) + 1;
+        while ((1 << (levels + 1)) <= 256 && (1 << levels) < cells) ++levels;
+        const int top = 1 << levels;
+        w = (width_ + 1 + top - 1) / top * top;
+        h = (height_ + 1 + top - 1) / top * top;
+    }
+    Level cells{w, h, std::vector<float>(size_t(w) * size_t(h))};
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i) {
+            const Cell c = CellAt(i - offset_, j - offset_);
+            cells.minima[size_t(j) * size_t(w) + size_t(i)] =
+                float(std::min({c.d00, c.d10, c.d01, c.d11}));
+        }
+    levels_.push_back(std::move(cells));
+    for (int l = 0; l < levels; ++l) {
+        const Level& below = levels_.back();
+        Level up{below.width / 2, below.height / 2, {}};
+        up.minima.resize(size_t(up.width) * size_t(up.height));
+        for (int j = 0; j < up.height; ++j)
+            for (int i = 0; i < up.width; ++i) {
+                const size_t c = size_t(2 * j) * size_t(below.width) + size_t(2 * i);
+                const size_t w2 = size_t(below.width);
+                up.minima[size_t(j) * size_t(up.width) + size_t(i)] =
+                    std::min({below.minima[c], below.minima[c + 1], below.minima[c + w2],
+                              below.minima[c + w2 + 1]});
+            }
+        levels_.push_back(std::move(up));
+    }
+}
+
+double ExactSurface::Texel(int64_t i, int64_t j) const {
+    if (wrap_ == WrapMode::Repeat) {
+        i = Wrap(i, width_);
+        j = Wrap(j, height_);
+    } else {
+        i = std::clamp<int64_t>(i, 0, width_ - 1);
+        j = std::clamp<int64_t>(j, 0, height_ - 1);
+    }
+    return depth_[size_t(j) * size_t(width_) + size_t(i)];
+}
+
+ExactSurface::Cell ExactSurface::CellAt(int64_t i, int64_t j) const {
+    return {Texel(i, j), Texel(i + 1, j), Texel(i, j + 1), Texel(i + 1, j + 1)};
+}
+
+double ExactSurface::DepthAt(double u, double v) const {
+    const double x = u * width_ - 0.5, y = v * height_ - 0.5;
+    const int64_t i = FloorIndex(x), j = FloorIndex(y);
+    const double fx = x - double(i), fy = y - double(j);
+    const Cell c = CellAt(i, j);
+    return (c.d00 * (1 - fx) + c.d10 * fx) * (1 - fy) + (c.d01 * (1 - fx) + c.d11 * fx) * fy;
+}
+
+float ExactSurface::BlockMinimum(int level, int64_t bx, int64_t by) const {
+    const Level& l = levels_[size_t(level)];
+    if (wrap_ == WrapMode::Repeat) {
+        bx = Wrap(bx, l.width);
+        by = Wrap(by, l.height);
+    } else {
+        bx = std::clamp<int64_t>(bx, 0, l.width - 1);
+        by = std::clamp<int64_t>(by, 0, l.height - 1);
+    }
+    return l.minima[size_t(by * l.width + bx)];
+}
+
+// Cell (i, j) for t in [t0, t1]. With s = t - t0 and the cell's local coordinates
+// fx = px + s dx, fy = py + s dy (px, py at t0), the bilinear depth is
+// D = a + b fx + c fy + e fx fy (a = d00, b = d10 - d00, c = d01 - d00,
+// e = d00 - d10 - d01 + d11), so g(s) = t0 + s - D = g0 + g1 s + g2 s^2 with
+// g0 = t0 - D(t0), g1 = 1 - (b dx + c dy + e (px dy + py dx)), g2 = -e dx dy.
+bool ExactSurface::SolveCell(const Ray& ray, int64_t i, int64_t j, double t0, double t1,
+                             ExactHit& hit) const {
+    const Cell c = CellAt(i - offset_, j - offset_);
+    if (t1 < std::min({c.d00, c.d10, c.d01, c.d11})) return false;  // above the cell
+    ++hit.cellsTested;
+    const double px = ray.X(t0) - double(i), py = ray.Y(t0) - double(j);
+    const double a = c.d00, b = c.d10 - c.d00, cc = c.d01 - c.d00,
+                 e = (c.d00 - c.d10) - (c.d01 - c.d11);
+    const double g0 = t0 - (a + b * px + cc * py + e * px * py);
+    if (g0 >= 0) {
+        hit.t = t0;
+        return true;
+    }
+    const double g1 = 1.0 - (b * ray.dx + cc * ray.dy + e * (px * ray.dy + py * ray.dx));
+    const double g2 = -e * ray.dx * ray.dy;
+    const double len = t1 - t0;
+    double s = kInf;
+    if (g2 == 0.0) {
+        if (g1 > 0.0) s = -g0 / g1;
+    } else {
+        const double disc = g1 * g1 - 4.0 * g2 * g0;
+        if (disc >= 0.0) {
+            // The two roots without cancellation: q / g2 and g0 / q.
+            const double q = -0.5 * (g1 + std::copysign(std::sqrt(disc), g1));
+            const double r1 = q / g2, r2 = g0 / q;
+            // g(0) < 0, so the least positive root is where the ray first reaches the
+            // surface.
+            if (r1 > 0.0) s = r1;
+            if (r2 > 0.0) s = std::min(s, r2);
+        }
+    }
+    if (!(s <= len)) return false;
+    hit.t = t0 + s;
+    return true;
+}
+
+// Walks the blocks of 2^level cells that the ray crosses for t in [ta, tb], from block
+// (bx, by), in order; descends into each block the ray may hit and tests cells at level
+// 0. Block boundaries are recomputed from their index at each step (no accumulated
+// increments), and an interval that rounding makes negative is empty.
+bool ExactSurface::Walk(const Ray& ray, int level, double ta, double tb, int64_t bx,
+                        int64_t by, ExactHit& hit) const {
+    const double size = double(int64_t(1) << level);
+    const int stepX = ray.dx > 0 ? 1 : (ray.dx < 0 ? -1 : 0);
+    const int stepY = ray.dy > 0 ? 1 : (ray.dy < 0 ? -1 : 0);
+    auto nextX = [&](int64_t b) {
+        if (stepX == 0) return kInf;
+        return (double(stepX > 0 ? b + 1 : b) * size - ray.x0) / ray.dx;
+    };
+    auto nextY = [&](int64_t b) {
+        if (stepY == 0) return kInf;
+        return (double(stepY > 0 ? b + 1 : b) * size - ray.y0) / ray.dy;
+    };
+    double t0 = ta, tx = nextX(bx), ty = nextY(by);
+    for (;;) {
+        const double t1 = std::max(t0, std::min({tx, ty, tb}));
+        if (level == 0) {
+            if (SolveCell(ray, bx, by, t0, t1, hit)) return true;
+        } else if (!(t1 < double(BlockMinimum(level, bx, by)))) {
+            // The child block holding the ray at t0, kept among this block's children.
+            const double half = size / 2;
+            const int64_t cx =
+                std::clamp(FloorIndex(ray.X(t0) / half), 2 * bx, 2 * bx + 1);
+            const int64_t cy =
+                std::clamp(FloorIndex(ray.Y(t0) / half), 2 * by, 2 * by + 1);
+            if (Walk(ray, level - 1, t0, t1, cx, cy, hit)) return true;
+        }
+        if (t1 >= tb) return false;
+        if (tx <= ty) {
+            bx += stepX;
+            tx = nextX(bx);
+        } else {
+            by += stepY;
+            ty = nextY(by);
+        }
+        t0 = t1;
+    }
+}
+
+ExactHit ExactSurface::FirstHit(double u0, double v0, double du, double dv) const {
+    RS_CHECK(std::isfinite(u0) && std::isfinite(v0) && std::isfinite(du) &&
+             std::isfinite(dv));
+    const Ray ray{u0 * width_ - 0.5 + offset_, v0 * height_ - 0.5 + offset_, du * width_,
+                  dv * height_};
+    ExactHit hit;
+    const int top = PyramidLevels();
+    const int64_t size = int64_t(1) << top;
+    const int64_t bx = FloorDiv(FloorIndex(ray.x0), size);
+    const int64_t by = FloorDiv(FloorIndex(ray.y0), size);
+    if (!Walk(ray, top, 0.0, 1.0, bx, by, hit)) {
+        // Depths are at most 1, so the ray is inside at t = 1; the walk misses that only
+        // when the root at the very bottom rounds past t = 1.
+        hit.t = 1.0;
+    }
+    hit.u = u0 + hit.t * du;
+    hit.v = v0 + hit.t * dv;
+    return hit;
+}
+
+}  // namespace reliefsim
