@@ -1,8 +1,9 @@
 // The exact reference's frame (method `exact`, metrics/exact.h): a 512x512 render per
-// iteration, timed over the frame loop (RenderOutput::frameSeconds), on the built-in maps,
-// the DirectX SDK's rocks and stones (8-bit, from ../shared/data; skipped when absent),
-// and stones upsampled to a 1024^2 float map; at 45 degrees, at a grazing 80 degrees and
-// tiled 3x with clamp (no pyramid). The goal is <= 1 s per frame (docs/exact.md).
+// iteration, timed over the frame loop (RenderOutput::frameSeconds), on the built-in
+// maps, the DirectX SDK's rocks and stones (8-bit, from ../shared/data; skipped when
+// absent), and stones upsampled to a 1024^2 float map; at 45 degrees, at a grazing 80
+// degrees and tiled 3x with clamp (no pyramid). The goal is <= 1 s per frame
+// (docs/exact.md).
 #include <benchmark/benchmark.h>
 
 #include <filesystem>
@@ -95,7 +96,8 @@ int main(int argc, char** argv) {
     const std::string data = RS_SHARED_DATA;
     if (std::filesystem::exists(data + "/dxsdk-pom/rocks_NM_height.tga")) {
         MapLoadOptions o;
-        Register("rocks256_8bit", LoadHeightMap(data + "/dxsdk-pom/rocks_NM_height.tga", o));
+        Register("rocks256_8bit",
+                 LoadHeightMap(data + "/dxsdk-pom/rocks_NM_height.tga", o));
         const DepthField stones =
             LoadHeightMap(data + "/dxsdk-pom/stones_NM_height.tga", o);
         Register("stones256_8bit", stones);

@@ -50,13 +50,13 @@ ExactSurface::ExactSurface(const DepthField& field, WrapMode wrap)
     : width_(field.width), height_(field.height), wrap_(wrap) {
     ValidateDepthField(field);
     depth_.assign(field.depth.begin(), field.depth.end());
-    // Level 0: each cell's least corner; level l + 1: the least of 2 x 2 blocks of level l.
-    // Repeat: the W x H cells of one period, halved while both sides stay even (so no
+    // Level 0: each cell's least corner; level l + 1: the least of 2 x 2 blocks of level
+    // l. Repeat: the W x H cells of one period, halved while both sides stay even (so no
     // block straddles the texture's edge). Clamp: the cells -1 .. W-1 (-1 .. H-1), the
     // only distinct ones (cell i <= -1 equals cell -1, i >= W-1 equals W-1), stored from
     // index 0 (offset_ = 1) and padded with copies of the last to a multiple of the top
-    // block size, at most 256 cells; a block past the edges takes the edge block's minimum,
-    // which covers the same (repeated) cells.
+    // block size, at most 256 cells; a block past the edges takes the edge block's
+    // minimum, which covers the same (repeated) cells.
     int w = width_, h = height_, levels = 0;
     if (wrap == WrapMode::Repeat) {
         while (((w >> levels) % 2 == 0) && ((h >> levels) % 2 == 0)) ++levels;
@@ -112,7 +112,8 @@ double ExactSurface::DepthAt(double u, double v) const {
     const int64_t i = FloorIndex(x), j = FloorIndex(y);
     const double fx = x - double(i), fy = y - double(j);
     const Cell c = CellAt(i, j);
-    return (c.d00 * (1 - fx) + c.d10 * fx) * (1 - fy) + (c.d01 * (1 - fx) + c.d11 * fx) * fy;
+    return (c.d00 * (1 - fx) + c.d10 * fx) * (1 - fy) +
+           (c.d01 * (1 - fx) + c.d11 * fx) * fy;
 }
 
 float ExactSurface::BlockMinimum(int level, int64_t bx, int64_t by) const {

@@ -24,8 +24,8 @@ namespace reliefsim {
 
 /// The first hit of one ray.
 struct ExactHit {
-    double t = 1.0;         ///< ray depth of the first point inside, in [0, 1]
-    double u = 0, v = 0;    ///< uvEntry + t dirUv (unwrapped, tiling included)
+    double t = 1.0;            ///< ray depth of the first point inside, in [0, 1]
+    double u = 0, v = 0;       ///< uvEntry + t dirUv (unwrapped, tiling included)
     uint32_t cellsTested = 0;  ///< bilinear cells whose quadratic was set up
 };
 
@@ -64,7 +64,7 @@ class ExactSurface {
                    ExactHit& hit) const;
 
     struct Level {
-        int width, height;  ///< in blocks
+        int width, height;          ///< in blocks
         std::vector<float> minima;  ///< row-major: the least depth of each block's cells
     };
 

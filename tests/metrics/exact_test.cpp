@@ -23,7 +23,8 @@ DepthField Field(int w, int h, auto&& depthAt) {
     f.name = "test";
     f.depth.resize(size_t(w) * size_t(h));
     for (int j = 0; j < h; ++j)
-        for (int i = 0; i < w; ++i) f.depth[size_t(j) * size_t(w) + size_t(i)] = depthAt(i, j);
+        for (int i = 0; i < w; ++i)
+            f.depth[size_t(j) * size_t(w) + size_t(i)] = depthAt(i, j);
     return f;
 }
 
@@ -99,8 +100,8 @@ struct OracleStats {
 
 /// Checks every ray against the oracle: the exact hit is on the surface or inside it, it
 /// is never after the oracle's first inside sample, and it agrees with the bisected
-/// crossing to 1e-9 unless it lies before the oracle's bracket (a feature thinner than the
-/// sample spacing, which the exact hit must then really touch).
+/// crossing to 1e-9 unless it lies before the oracle's bracket (a feature thinner than
+/// the sample spacing, which the exact hit must then really touch).
 void CheckAgainstOracle(const ExactSurface& s, const std::vector<RayCase>& rays,
                         OracleStats& stats, const char* what) {
     for (const RayCase& r : rays) {
@@ -110,11 +111,12 @@ void CheckAgainstOracle(const ExactSurface& s, const std::vector<RayCase>& rays,
         ++stats.rays;
         ASSERT_GE(e.t, 0.0);
         ASSERT_LE(e.t, 1.0);
-        ASSERT_GE(gExact, -1e-12) << what << ": the exact hit is not on the surface, ray "
-                                  << r.u0 << "," << r.v0 << " dir " << r.du << "," << r.dv;
+        ASSERT_GE(gExact, -1e-12)
+            << what << ": the exact hit is not on the surface, ray " << r.u0 << ","
+            << r.v0 << " dir " << r.du << "," << r.dv;
         ASSERT_LE(e.t, o.tInside + 1e-12)
-            << what << ": the oracle found the ray inside before the exact hit, ray " << r.u0
-            << "," << r.v0 << " dir " << r.du << "," << r.dv << " exact " << e.t
+            << what << ": the oracle found the ray inside before the exact hit, ray "
+            << r.u0 << "," << r.v0 << " dir " << r.du << "," << r.dv << " exact " << e.t
             << " oracle " << o.t;
         EXPECT_NEAR(e.u, r.u0 + e.t * r.du, 1e-15 + 1e-15 * std::abs(e.u));
         if (e.t < o.tBefore) {
@@ -144,7 +146,8 @@ TEST(Exact, FlatFieldIsHitAtItsDepthByEveryRay) {
 TEST(Exact, TopAndBottomOfTheRange) {
     const ExactSurface top(Field(4, 4, [](int, int) { return 0.0f; }), WrapMode::Repeat);
     EXPECT_EQ(top.FirstHit(0.3, 0.7, 0.5, -0.2).t, 0.0);
-    const ExactSurface bottom(Field(4, 4, [](int, int) { return 1.0f; }), WrapMode::Repeat);
+    const ExactSurface bottom(Field(4, 4, [](int, int) { return 1.0f; }),
+                              WrapMode::Repeat);
     EXPECT_EQ(bottom.FirstHit(0.3, 0.7, 0.5, -0.2).t, 1.0);
 }
 
@@ -212,10 +215,10 @@ TEST(Exact, PyramidLevelsFollowTheSize) {
 }
 
 TEST(Exact, RefusesAFieldOutsideTheDepthRange) {
-    EXPECT_THROW(ExactSurface(Field(4, 4, [](int, int) { return NAN; }), WrapMode::Repeat),
-                 Error);
-    EXPECT_THROW(ExactSurface(Field(4, 4, [](int, int) { return 1.5f; }), WrapMode::Clamp),
-                 Error);
+    EXPECT_THROW(
+        ExactSurface(Field(4, 4, [](int, int) { return NAN; }), WrapMode::Repeat), Error);
+    EXPECT_THROW(
+        ExactSurface(Field(4, 4, [](int, int) { return 1.5f; }), WrapMode::Clamp), Error);
 }
 
 // Every built-in map (64^2: the pyramid has 6 levels) in both wraps, and random maps of
@@ -228,21 +231,23 @@ TEST(Exact, AgreesWithADenseOracleOnEveryBuiltinAndRandomMaps) {
         const DepthField f = MakeBuiltinMap(name, 64, 64);
         for (WrapMode wrap : {WrapMode::Repeat, WrapMode::Clamp}) {
             const ExactSurface s(f, wrap);
-            CheckAgainstOracle(s, RandomRays(40, 6.0, seed++, 64, 64), stats, name.c_str());
+            CheckAgainstOracle(s, RandomRays(40, 6.0, seed++, 64, 64), stats,
+                               name.c_str());
         }
     }
     std::mt19937 rng(5);
     std::uniform_real_distribution<float> d(0.0f, 1.0f);
-    for (auto [w, h] : {std::pair{17, 13}, std::pair{32, 32}, std::pair{1, 1},
-                        std::pair{2, 7}}) {
+    for (auto [w, h] :
+         {std::pair{17, 13}, std::pair{32, 32}, std::pair{1, 1}, std::pair{2, 7}}) {
         const DepthField f = Field(w, h, [&](int, int) { return d(rng); });
         for (WrapMode wrap : {WrapMode::Repeat, WrapMode::Clamp}) {
             const ExactSurface s(f, wrap);
             CheckAgainstOracle(s, RandomRays(60, 6.0, seed++, w, h), stats, "random");
         }
     }
-    std::printf("exact vs dense oracle: %d rays, worst |t difference| %.3g, %d thin "
-                "features only the exact hit saw\n",
-                stats.rays, stats.worst, stats.thinTouches);
+    std::printf(
+        "exact vs dense oracle: %d rays, worst |t difference| %.3g, %d thin "
+        "features only the exact hit saw\n",
+        stats.rays, stats.worst, stats.thinTouches);
     EXPECT_GT(stats.rays, 1000);
 }
