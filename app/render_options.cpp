@@ -90,6 +90,9 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
         ->capture_default_str()
         ->check(CLI::IsMember({0, 1, 4, 8, 16}));
     if (!withHeatmapScales) return;
+    cmd->add_flag("--reference,!--no-reference", o.settings.reference,
+                  "also compute the exact reference of every pixel and the metrics "
+                  "against it (on by default)");
     const RenderSettings& s = o.settings;
     cmd->add_option("--iterations-scale", o.iterScale,
                     "fixed MIN:MAX of the iterations heatmap")

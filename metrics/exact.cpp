@@ -169,12 +169,13 @@ bool ExactSurface::SolveCell(const Ray& ray, int64_t i, int64_t j, double t0, do
     return true;
 }
 
-// Walks the blocks of 2^level cells that the ray crosses for t in [ta, tb], from block
-// (bx, by), in order; descends into each block the ray may hit and tests cells at level
-// 0. Block boundaries are recomputed from their index at each step (no accumulated
+// Calls visit(bx, by, t0, t1) for the blocks of 2^level cells that the ray crosses for
+// t in [ta, tb], from block (bx, by), in order, until visit returns true (then returns
+// true). Block boundaries are recomputed from their index at each step (no accumulated
 // increments), and an interval that rounding makes negative is empty.
-bool ExactSurface::Walk(const Ray& ray, int level, double ta, double tb, int64_t bx,
-                        int64_t by, ExactHit& hit) const {
+template <class Visit>
+bool ExactSurface::CrossBlocks(const Ray& ray, int level, double ta, double tb,
+                               int64_t bx, int64_t by, Visit&& visit) {
     const double size = double(int64_t(1) << level);
     const int stepX = ray.dx > 0 ? 1 : (ray.dx < 0 ? -1 : 0);
     const int stepY = ray.dy > 0 ? 1 : (ray.dy < 0 ? -1 : 0);
@@ -189,17 +190,7 @@ bool ExactSurface::Walk(const Ray& ray, int level, double ta, double tb, int64_t
     double t0 = ta, tx = nextX(bx), ty = nextY(by);
     for (;;) {
         const double t1 = std::max(t0, std::min({tx, ty, tb}));
-        if (level == 0) {
-            if (SolveCell(ray, bx, by, t0, t1, hit)) return true;
-        } else if (!(t1 < double(BlockMinimum(level, bx, by)))) {
-            // The child block holding the ray at t0, kept among this block's children.
-            const double half = size / 2;
-            const int64_t cx =
-                std::clamp(FloorIndex(ray.X(t0) / half), 2 * bx, 2 * bx + 1);
-            const int64_t cy =
-                std::clamp(FloorIndex(ray.Y(t0) / half), 2 * by, 2 * by + 1);
-            if (Walk(ray, level - 1, t0, t1, cx, cy, hit)) return true;
-        }
+        if (visit(bx, by, t0, t1)) return true;
         if (t1 >= tb) return false;
         if (tx <= ty) {
             bx += stepX;
@@ -212,11 +203,60 @@ bool ExactSurface::Walk(const Ray& ray, int level, double ta, double tb, int64_t
     }
 }
 
-ExactHit ExactSurface::FirstHit(double u0, double v0, double du, double dv) const {
+// The hit walk: cells at level 0; a block the ray may hit (its minimum is not above the
+// ray's exit depth) is walked one level down, from the child holding the ray at t0.
+bool ExactSurface::Walk(const Ray& ray, int level, double ta, double tb, int64_t bx,
+                        int64_t by, ExactHit& hit) const {
+    return CrossBlocks(
+        ray, level, ta, tb, bx, by, [&](int64_t x, int64_t y, double t0, double t1) {
+            if (level == 0) return SolveCell(ray, x, y, t0, t1, hit);
+            if (t1 < double(BlockMinimum(level, x, y))) return false;
+            const double half = double(int64_t(1) << (level - 1));
+            const int64_t cx = std::clamp(FloorIndex(ray.X(t0) / half), 2 * x, 2 * x + 1);
+            const int64_t cy = std::clamp(FloorIndex(ray.Y(t0) / half), 2 * y, 2 * y + 1);
+            return Walk(ray, level - 1, t0, t1, cx, cy, hit);
+        });
+}
+
+ExactSurface::Ray ExactSurface::MakeRay(double u0, double v0, double du,
+                                        double dv) const {
     RS_CHECK(std::isfinite(u0) && std::isfinite(v0) && std::isfinite(du) &&
              std::isfinite(dv));
-    const Ray ray{u0 * width_ - 0.5 + offset_, v0 * height_ - 0.5 + offset_, du * width_,
-                  dv * height_};
+    return {u0 * width_ - 0.5 + offset_, v0 * height_ - 0.5 + offset_, du * width_,
+            dv * height_};
+}
+
+bool ExactSurface::LeavesBetween(double u0, double v0, double du, double dv, double ta,
+                                 double tb, double tolerance) const {
+    if (!(tb > ta)) return false;
+    const Ray ray = MakeRay(u0, v0, du, dv);
+    return CrossBlocks(
+        ray, 0, ta, tb, FloorIndex(ray.X(ta)), FloorIndex(ray.Y(ta)),
+        [&](int64_t i, int64_t j, double t0, double t1) {
+            // g(s) = g0 + g1 s + g2 s^2 on [0, t1 - t0] (SolveCell's coefficients); its
+            // least value is at an end or, for g2 > 0, at the vertex.
+            const Cell c = CellAt(i - offset_, j - offset_);
+            if (t0 >= std::max({c.d00, c.d10, c.d01, c.d11}) - tolerance) return false;
+            const double px = ray.X(t0) - double(i), py = ray.Y(t0) - double(j);
+            const double b = c.d10 - c.d00, cc = c.d01 - c.d00,
+                         e = (c.d00 - c.d10) - (c.d01 - c.d11);
+            const double g0 = t0 - (c.d00 + b * px + cc * py + e * px * py);
+            const double g1 =
+                1.0 - (b * ray.dx + cc * ray.dy + e * (px * ray.dy + py * ray.dx));
+            const double g2 = -e * ray.dx * ray.dy;
+            const double len = t1 - t0;
+            auto g = [&](double s) { return g0 + (g1 + g2 * s) * s; };
+            double least = std::min(g(0.0), g(len));
+            if (g2 > 0.0) {
+                const double vertex = -g1 / (2.0 * g2);
+                if (vertex > 0.0 && vertex < len) least = std::min(least, g(vertex));
+            }
+            return least < -tolerance;
+        });
+}
+
+ExactHit ExactSurface::FirstHit(double u0, double v0, double du, double dv) const {
+    const Ray ray = MakeRay(u0, v0, du, dv);
     ExactHit hit;
     const int top = PyramidLevels();
     const int64_t size = int64_t(1) << top;

@@ -41,6 +41,12 @@ class ExactSurface {
     /// The first t in [0, 1] with t >= depth(uvEntry + t dirUv) on the bilinear surface.
     ExactHit FirstHit(double u0, double v0, double du, double dv) const;
 
+    /// Whether the ray is outside the surface (t < depth - tolerance) somewhere in
+    /// (ta, tb): between a first hit at ta and a later point tb, it left the relief and
+    /// came back, so tb lies beyond a structure, not inside the one hit first.
+    bool LeavesBetween(double u0, double v0, double du, double dv, double ta, double tb,
+                       double tolerance) const;
+
     /// The bilinear surface's depth at (u, v), in double: what FirstHit solves against
     /// (the dense oracle of the tests samples it).
     double DepthAt(double u, double v) const;
@@ -58,6 +64,10 @@ class ExactSurface {
     double Texel(int64_t i, int64_t j) const;
     Cell CellAt(int64_t i, int64_t j) const;
     float BlockMinimum(int level, int64_t bx, int64_t by) const;
+    Ray MakeRay(double u0, double v0, double du, double dv) const;
+    template <class Visit>
+    static bool CrossBlocks(const Ray& ray, int level, double ta, double tb, int64_t bx,
+                            int64_t by, Visit&& visit);
     bool Walk(const Ray& ray, int level, double ta, double tb, int64_t bx, int64_t by,
               ExactHit& hit) const;
     bool SolveCell(const Ray& ray, int64_t i, int64_t j, double t0, double t1,

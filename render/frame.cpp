@@ -16,6 +16,7 @@
 #include "raster/rasterizer.h"
 #include "render/batch.h"
 #include "render/exact_batch.h"
+#include "render/reference.h"
 
 namespace reliefsim {
 
@@ -240,6 +241,12 @@ RenderOutput Render(const DepthField& field, const RenderSettings& s) {
         out.laneCost.wave64 += t.laneCost.wave64;
     }
     out.summary = Summarize(out.record, field, s.sampler);
+    if (s.reference) {
+        out.hasReference = true;
+        out.reference = RenderReference(field, s, out.record);
+        out.referenceSummary = SummarizeAgainstReference(
+            out.record, out.color, out.reference, field.width, field.height);
+    }
     return out;
 }
 

@@ -8,6 +8,7 @@
 
 #include "core/record.h"
 #include "kernels/registry.h"
+#include "metrics/reference_metrics.h"
 #include "metrics/summary.h"
 #include "render/scene.h"
 #include "texture/depth_field.h"
@@ -49,6 +50,9 @@ struct RenderOutput {
     int lanes = 0;              ///< lane width of the fragment driver (timing only)
     std::string isa;            ///< its instruction set (timing only)
     LaneCosts laneCost;
+    bool hasReference = false;  ///< settings.reference: the two below are set
+    ReferenceRecord reference;
+    ReferenceSummary referenceSummary;
 };
 
 /// Renders one frame of the textured plane with the settings' method.

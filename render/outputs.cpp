@@ -79,10 +79,33 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
     j["lane_cost_4x2"] = out.laneCost.group4x2;
     j["lane_cost_warp32"] = out.laneCost.warp32;
     j["lane_cost_wave64"] = out.laneCost.wave64;
+    // The share of the lane-trips a group pays that do a covered pixel's work.
+    auto utilisation = [&](uint64_t cost) {
+        return cost == 0 ? nlohmann::json(nullptr)
+                         : nlohmann::json(double(m.totalFetches) / double(cost));
+    };
+    j["lane_utilisation_quad"] = utilisation(out.laneCost.quad);
+    j["lane_utilisation_4x2"] = utilisation(out.laneCost.group4x2);
+    j["lane_utilisation_warp32"] = utilisation(out.laneCost.warp32);
+    j["lane_utilisation_wave64"] = utilisation(out.laneCost.wave64);
+    j["reference"] = out.hasReference;
+    if (out.hasReference) {
+        const ReferenceSummary& r = out.referenceSummary;
+        j["mse_exact_depth"] = r.mseExactDepth;
+        j["depth_error_mean"] = r.depthErrorMean;
+        j["depth_error_max_abs"] = r.depthErrorMaxAbs;
+        j["uv_error_texels_mean"] = r.uvErrorTexelsMean;
+        j["uv_error_texels_max"] = r.uvErrorTexelsMax;
+        j["missed_geometry_pixels"] = r.missedGeometryPixels;
+        // Equal colours give an infinite PSNR, which JSON cannot hold: null.
+        j["psnr_color"] = std::isfinite(r.psnrColor) ? nlohmann::json(r.psnrColor)
+                                                     : nlohmann::json(nullptr);
+    }
     j["timing"] = {{"frame_seconds", out.frameSeconds},
                    {"threads", out.threads},
                    {"lanes", out.lanes},
                    {"isa", out.isa}};
+    if (out.hasReference) j["timing"]["reference_seconds"] = out.reference.seconds;
     return j;
 }
 
@@ -102,6 +125,7 @@ void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
     for (const char* name :
          {"color.png", "iterations.png", "fetches.png", "record.exr", "metrics.json"})
         outputs.Add(dest(name));
+    if (out.hasReference) outputs.Add(dest("missed_geometry.png"));
     const FrameRecord& r = out.record;
     const int w = r.width, h = r.height;
     const size_t n = size_t(w) * size_t(h);
@@ -126,13 +150,43 @@ void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
     WriteHeatmapPng(dest("fetches.png"), fetches.data(), mask.data(), w, h,
                     {s.fetchScaleMin, s.fetchScaleMax, "inferno", "fetches, " + s.method},
                     &outputs);
-    WriteMultiChannelExr(
-        dest("record.exr"), w, h,
-        {"hit_u", "hit_v", "hit_depth", "coarse_iterations", "refine_iterations",
-         "iterations", "fetches", "texel_reads", "flags", "error_paper"},
-        {r.hitU.data(), r.hitV.data(), r.hitDepth.data(), coarse.data(), refine.data(),
-         iters.data(), fetches.data(), texels.data(), flags.data(), err.data()},
-        &outputs);
+    std::vector<std::string> names = {"hit_u",
+                                      "hit_v",
+                                      "hit_depth",
+                                      "coarse_iterations",
+                                      "refine_iterations",
+                                      "iterations",
+                                      "fetches",
+                                      "texel_reads",
+                                      "flags",
+                                      "error_paper"};
+    std::vector<const float*> channels = {
+        r.hitU.data(), r.hitV.data(),  r.hitDepth.data(), coarse.data(), refine.data(),
+        iters.data(),  fetches.data(), texels.data(),     flags.data(),  err.data()};
+    std::vector<float> depthError, uvError, missed, missedRgb;
+    if (out.hasReference) {
+        const ReferenceRecord& ref = out.reference;
+        depthError.assign(n, 0.0f), uvError.assign(n, 0.0f), missed.assign(n, 0.0f);
+        missedRgb.assign(3 * n, 0.0f);
+        for (size_t i = 0; i < n; ++i) {
+            if (!mask[i]) continue;
+            depthError[i] = r.hitDepth[i] - ref.depth[i];
+            uvError[i] = float(UvErrorTexels(double(r.hitU[i]) - double(ref.u[i]),
+                                             double(r.hitV[i]) - double(ref.v[i]),
+                                             field.width, field.height));
+            missed[i] = float(ref.missed[i]);
+            // The mask: white where geometry was missed, grey elsewhere on the plane.
+            const float shade = ref.missed[i] ? 1.0f : 0.25f;
+            for (size_t c = 0; c < 3; ++c) missedRgb[3 * i + c] = shade;
+        }
+        names.insert(names.end(), {"ref_u", "ref_v", "ref_depth", "depth_error",
+                                   "uv_error_texels", "missed_geometry"});
+        channels.insert(channels.end(),
+                        {ref.u.data(), ref.v.data(), ref.depth.data(), depthError.data(),
+                         uvError.data(), missed.data()});
+        WriteColorPng(dest("missed_geometry.png"), missedRgb.data(), w, h, &outputs);
+    }
+    WriteMultiChannelExr(dest("record.exr"), w, h, names, channels, &outputs);
     outputs.Write(dest("metrics.json"), MetricsJson(out, s, field).dump(2) + "\n");
     outputs.Commit();
 }

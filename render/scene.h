@@ -39,6 +39,9 @@ struct RenderSettings {
     int lanes = 0;            ///< fragment-driver lane width; 0 = the widest the CPU runs
     float iterScaleMin = 0.0f, iterScaleMax = 64.0f;    ///< iterations heatmap scale
     float fetchScaleMin = 0.0f, fetchScaleMax = 64.0f;  ///< fetches heatmap scale
+    /// Also compute the exact reference of every covered pixel and the metrics against it
+    /// (render/reference.h; --no-reference turns it off).
+    bool reference = true;
 };
 
 /// Throws Error naming the first bad setting (size, angles, depth scale, tiling, threads,

@@ -168,6 +168,29 @@ TEST(Cli, ExactMethodIsListedRenderedAndTraced) {
     EXPECT_NE(t.out.find("exact first hit: t "), std::string::npos) << t.out;
 }
 
+TEST(Cli, ReferenceMetricsAndTheirSwitch) {
+    fs::path d = Scratch();
+    Result r =
+        RunCli("render --map builtin:shapes:64 --method linear --size 64x48 --out " +
+                   (d / "on").string(),
+               d);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(fs::exists(d / "on" / "missed_geometry.png"));
+    std::ifstream on(d / "on" / "metrics.json");
+    const std::string json((std::istreambuf_iterator<char>(on)), {});
+    for (const char* key :
+         {"\"mse_exact_depth\"", "\"uv_error_texels_mean\"", "\"uv_error_texels_max\"",
+          "\"missed_geometry_pixels\"", "\"psnr_color\"", "\"lane_utilisation_warp32\""})
+        EXPECT_NE(json.find(key), std::string::npos) << key;
+    Result off = RunCli(
+        "render --map builtin:shapes:64 --method linear --size 64x48 --no-reference "
+        "--out " +
+            (d / "off").string(),
+        d);
+    ASSERT_EQ(off.exitCode, 0) << off.err;
+    EXPECT_FALSE(fs::exists(d / "off" / "missed_geometry.png"));
+}
+
 TEST(Cli, ExactMethodRefusesWhatItCannotDo) {
     ExpectCleanFailure(
         "render --map builtin:shapes:32 --method exact --set linear_steps=8",

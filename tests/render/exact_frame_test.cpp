@@ -104,3 +104,47 @@ TEST(ExactFrame, TraceEqualsTheFrameRecord) {
         EXPECT_EQ(t.result.nCoarse, out.record.nCoarse[i]);
     }
 }
+
+// The reference pass of a kernel's frame holds the exact frame's hits and colours.
+TEST(ReferencePass, EqualsTheExactFrame) {
+    const DepthField field = MakeBuiltinMap("builtin:shapes:64");
+    const RenderOutput exact = Render(field, Settings("exact"));
+    RenderSettings s = Settings("relief");
+    s.threads = 2;
+    const RenderOutput relief = Render(field, s);
+    ASSERT_TRUE(relief.hasReference);
+    for (size_t i = 0; i < exact.record.hitDepth.size(); ++i) {
+        if (!exact.record.Covered(i)) continue;
+        ASSERT_EQ(relief.reference.depth[i], exact.record.hitDepth[i]) << i;
+        ASSERT_EQ(relief.reference.u[i], exact.record.hitU[i]);
+        for (size_t c = 0; c < 3; ++c)
+            ASSERT_EQ(relief.reference.rgb[3 * i + c], exact.color[3 * i + c]);
+    }
+    EXPECT_EQ(exact.referenceSummary.missedGeometryPixels, 0u);
+    EXPECT_EQ(exact.referenceSummary.mseExactDepth, 0.0);
+}
+
+// A one-texel ridge (depth 0) across a floor at depth 1: 4 linear steps jump over it
+// for many rays (missed geometry), 1024 steps cannot (a step moves 0.01 texel and the
+// ridge's base is 2 texels wide), and on a flat field the overshoot of 2 steps is never
+// missed geometry.
+TEST(ReferencePass, MissedGeometryOnARidge) {
+    DepthField ridge;
+    ridge.width = ridge.height = 64;
+    ridge.name = "ridge";
+    ridge.depth.assign(64 * 64, 1.0f);
+    for (int j = 0; j < 64; ++j) ridge.depth[size_t(j) * 64 + 32] = 0.0f;
+    RenderSettings s = Settings("linear");
+    s.azimuth = 90.0f;  // rays cross the ridge
+    s.set = {"linear_steps=4"};
+    const RenderOutput coarse = Render(ridge, s);
+    EXPECT_GT(coarse.referenceSummary.missedGeometryPixels, 20u);
+    s.set = {"linear_steps=1024"};
+    EXPECT_EQ(Render(ridge, s).referenceSummary.missedGeometryPixels, 0u);
+    DepthField flat = ridge;
+    flat.depth.assign(64 * 64, 0.4f);
+    s.set = {"linear_steps=2"};
+    const RenderOutput f = Render(flat, s);
+    EXPECT_EQ(f.referenceSummary.missedGeometryPixels, 0u);
+    EXPECT_GT(f.referenceSummary.depthErrorMean, 0.0);  // it overshoots by up to a step
+}

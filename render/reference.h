@@ -1,0 +1,25 @@
+// The reference pass of a frame: the exact first hit (metrics/exact.h) of every covered
+// pixel's ray, its shading, and the missed-geometry test of the frame's hits.
+#pragma once
+
+#include "metrics/reference_metrics.h"
+#include "render/scene.h"
+#include "texture/depth_field.h"
+
+namespace reliefsim {
+
+/// One coarse step's depth of the settings' kernel: 1 / linear_steps for the kernels
+/// that step linearly (those with a `linear_steps` parameter), 0 for the others and for
+/// the exact method.
+double CoarseStepDepth(const RenderSettings& settings);
+
+/// The reference of `record` (a frame rendered with `settings`): for each covered pixel,
+/// the exact hit of the same ray (PixelToRay), shaded as the kernels shade (with the
+/// settings' sampler made bilinear: the reference's surface), and the missed-geometry
+/// test of record's hit against it (ReferenceRecord, MissedGeometry with
+/// CoarseStepDepth). Rows run in parallel under the caller's thread limit; each pixel's
+/// result is independent of the others, so the outputs do not depend on threads.
+ReferenceRecord RenderReference(const DepthField& field, const RenderSettings& settings,
+                                const FrameRecord& record);
+
+}  // namespace reliefsim
