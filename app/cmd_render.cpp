@@ -19,7 +19,9 @@ struct RenderArgs {
 void RunRender(RenderArgs& a) {
     ResolveRenderSettings(a.options);  // before any file is read or written
     const RenderSettings& s = a.options.settings;
-    CheckOutputDirectory("--out", a.out);
+    std::vector<std::string> outputs = RenderOutputNames();
+    if (!s.reference) outputs.pop_back();  // missed_geometry.png
+    CheckOutputDirectory("--out", a.out, outputs);
     RequireFrameMemory(s.width, s.height);
     DepthField field = LoadRenderMap(a.options);
     RequireFrameMemory(s.width, s.height);  // what is left once the map is in memory
@@ -34,7 +36,8 @@ void RunRender(RenderArgs& a) {
                   << "), mse_paper " << m.msePaper << ", " << out.frameSeconds * 1e3
                   << " ms\n"
                   << "wrote " << a.out
-                  << "/{color.png,iterations.png,fetches.png,record.exr,metrics.json}\n";
+                  << "/{color.png,iterations.png,fetches.png,record.exr,metrics.json"
+                  << (s.reference ? ",missed_geometry.png" : "") << "}\n";
     }
 }
 
@@ -45,11 +48,10 @@ void RegisterRenderCommand(CLI::App& root) {
     auto* cmd = root.add_subcommand(
         "render",
         "render the textured plane with one method; write color.png, iterations.png, "
-        "fetches.png, record.exr and metrics.json into --out");
+        "fetches.png, record.exr, metrics.json and missed_geometry.png into --out");
     AddRenderOptions(cmd, a->options);
-    cmd->add_option(
-           "--out", a->out,
-           "output directory (created with its parents; the five files replaced)")
+    cmd->add_option("--out", a->out,
+                    "output directory (created with its parents; the outputs replaced)")
         ->required();
     cmd->add_flag("--quiet", a->quiet, "print nothing on success");
     cmd->callback([a] { RunRender(*a); });

@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
     RegisterSummaryCommand(app);
     RegisterTraceCommand(app);
     RegisterMapsCommand(app);
+    RegisterSweepCommand(app);
 #ifdef RS_HAVE_GLCOMPARE_COMMAND
     RegisterGlCompareCommand(app);
 #endif

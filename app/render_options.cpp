@@ -13,8 +13,6 @@
 
 namespace reliefsim {
 
-namespace {
-
 void ParseSize(const std::string& text, int& w, int& h) {
     const size_t x = text.find_first_of("xX");
     if (text.empty() || x == std::string::npos || x == 0 || x + 1 == text.size())
@@ -24,6 +22,8 @@ void ParseSize(const std::string& text, int& w, int& h) {
     h = int(ParseIntInRange(std::string_view(text).substr(x + 1), 1, kMaxImageSize,
                             "--size \"" + text + "\": height"));
 }
+
+namespace {
 
 void ParseScale(const std::string& opt, const std::string& text, float& lo, float& hi) {
     if (text.empty()) return;

@@ -35,6 +35,9 @@ struct RenderOptions {
 void AddRenderOptions(CLI::App* cmd, RenderOptions& options,
                       bool withHeatmapScales = true);
 
+/// Parses "WxH" (--size) into w and h; throws Error naming --size.
+void ParseSize(const std::string& text, int& w, int& h);
+
 /// Parses the text options into options.settings and validates them (throws Error).
 void ResolveRenderSettings(RenderOptions& options);
 
@@ -49,10 +52,11 @@ std::pair<int, int> ParsePixel(const std::string& option, const std::string& tex
 void CheckOutputFile(const std::string& option, const std::string& path,
                      bool folderIsCreated = true);
 
-/// The files `render --out DIR` writes.
+/// The files `render --out DIR` writes (the last only with the reference, the default).
 inline const std::vector<std::string>& RenderOutputNames() {
     static const std::vector<std::string> kNames = {
-        "color.png", "iterations.png", "fetches.png", "record.exr", "metrics.json"};
+        "color.png",  "iterations.png", "fetches.png",
+        "record.exr", "metrics.json",   "missed_geometry.png"};
     return kNames;
 }
 

@@ -26,9 +26,9 @@ ReferenceSummary SummarizeAgainstReference(const FrameRecord& r,
         sum += e;
         sumSq += e * e;
         s.depthErrorMaxAbs = std::max(s.depthErrorMaxAbs, std::abs(e));
-        const double uv = UvErrorTexels(double(r.hitU[i]) - double(ref.u[i]),
-                                        double(r.hitV[i]) - double(ref.v[i]), mapWidth,
-                                        mapHeight);
+        const double uv =
+            UvErrorTexels(double(r.hitU[i]) - double(ref.u[i]),
+                          double(r.hitV[i]) - double(ref.v[i]), mapWidth, mapHeight);
         sumUv += uv;
         s.uvErrorTexelsMax = std::max(s.uvErrorTexelsMax, uv);
         s.missedGeometryPixels += ref.missed[i];

@@ -25,7 +25,8 @@ struct ReferenceRecord {
 /// stepping search stays within it) and the ray left the relief somewhere between the two
 /// (`leftBetween`: ExactSurface::LeavesBetween), so tHit is behind a skipped structure,
 /// not inside the one the ray met first.
-inline bool MissedGeometry(double tHit, double tRef, double coarseStep, bool leftBetween) {
+inline bool MissedGeometry(double tHit, double tRef, double coarseStep,
+                           bool leftBetween) {
     return tHit - tRef > coarseStep && leftBetween;
 }
 

@@ -70,13 +70,12 @@ ReferenceRecord RenderReference(const DepthField& field, const RenderSettings& s
             const double tHit = record.hitDepth[i], tRef = depth[k];
             if (!(tHit - tRef > step)) continue;
             const MarchInput in = PixelToRay(view, px[k], py[k]);
-            ref.missed[i] =
-                MissedGeometry(tHit, tRef, step,
-                               surface.LeavesBetween(in.uvEntry.x, in.uvEntry.y,
-                                                     in.dirUv.x, in.dirUv.y, tRef, tHit,
-                                                     kLeaveTolerance))
-                    ? 1
-                    : 0;
+            ref.missed[i] = MissedGeometry(tHit, tRef, step,
+                                           surface.LeavesBetween(
+                                               in.uvEntry.x, in.uvEntry.y, in.dirUv.x,
+                                               in.dirUv.y, tRef, tHit, kLeaveTolerance))
+                                ? 1
+                                : 0;
         }
     });
     ref.seconds =

@@ -204,3 +204,14 @@ TEST(Cli, ExactMethodRefusesWhatItCannotDo) {
     EXPECT_EQ(CountLines(g.err), 1) << g.err;
     EXPECT_NE(g.err.find("not a kernel"), std::string::npos) << g.err;
 }
+
+TEST(Cli, SweepWithABadConfigWritesNothing) {
+    const fs::path d = reliefsim::testing::Scratch("rs_sweep_cfg_");
+    {
+        std::ofstream(d / "bad.json")
+            << R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief", "set": {"linear_steps": 0}}]})";
+    }
+    ExpectCleanFailure("sweep --config " + (d / "bad.json").string(), "linear_steps");
+    ExpectCleanFailure("sweep --config " + (d / "missing.json").string(), "no such file");
+    ExpectCleanFailure("sweep --config " + d.string(), "not a regular file");
+}

@@ -58,8 +58,8 @@ TEST(ReferenceMetrics, ErrorsOverCoveredPixelsOnly) {
 TEST(ReferenceMetrics, EqualColoursHaveInfinitePsnr) {
     Frame f = Blank(3, 1);
     f.record.flags[1] = kFlagCovered;
-    EXPECT_TRUE(std::isinf(
-        SummarizeAgainstReference(f.record, f.color, f.ref, 4, 4).psnrColor));
+    EXPECT_TRUE(
+        std::isinf(SummarizeAgainstReference(f.record, f.color, f.ref, 4, 4).psnrColor));
 }
 
 TEST(ReferenceMetrics, MissedGeometryNeedsBothConditions) {

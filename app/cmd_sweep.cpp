@@ -1,0 +1,96 @@
+// `reliefsim sweep` and `reliefsim merge` (app/sweep.h, docs/studies.md).
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "app/commands.h"
+#include "app/sweep.h"
+#include "core/error.h"
+
+namespace reliefsim {
+
+namespace {
+
+struct SweepArgs {
+    std::string config, out;
+    int taskIndex = -1, taskCount = -1, maxRows = -1;
+    bool quiet = false;
+};
+
+/// An environment variable as a non-negative integer, or `fallback`.
+int EnvInt(const char* name, int fallback) {
+    const char* v = std::getenv(name);
+    if (!v || !*v) return fallback;
+    char* end = nullptr;
+    const long n = std::strtol(v, &end, 10);
+    if (*end != '\0' || n < 0 || n > 1000000)
+        throw Error(std::string(name) + "=\"" + v + "\": not a task number");
+    return int(n);
+}
+
+std::string ReadConfig(const std::string& path) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec))
+        throw Error("--config \"" + path + "\": " +
+                    (fs::exists(path, ec) ? "not a regular file" : "no such file"));
+    if (fs::file_size(path, ec) > (16u << 20))
+        throw Error("--config \"" + path + "\": larger than 16 MiB");
+    std::ifstream in(path, std::ios::binary);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    if (!in && !in.eof()) throw Error("--config \"" + path + "\": cannot be read");
+    return ss.str();
+}
+
+void RunSweepCommand(const SweepArgs& a) {
+    SweepRunOptions o;
+    o.taskIndex = a.taskIndex >= 0 ? a.taskIndex : EnvInt("SLURM_ARRAY_TASK_ID", 0);
+    o.taskCount = a.taskCount >= 0 ? a.taskCount : EnvInt("SLURM_ARRAY_TASK_COUNT", 1);
+    o.maxRows = a.maxRows;
+    o.progress = !a.quiet && isatty(2);
+    const int n = RunSweep(ReadConfig(a.config), "--config \"" + a.config + "\"", a.out, o);
+    if (!a.quiet)
+        std::cout << "reliefsim sweep: " << n << " configurations computed (task "
+                  << o.taskIndex << " of " << o.taskCount << "); wrote " << a.out
+                  << "/{results.csv,tables.md}\n";
+}
+
+}  // namespace
+
+void RegisterSweepCommand(CLI::App& root) {
+    auto a = std::make_shared<SweepArgs>();
+    auto* cmd = root.add_subcommand(
+        "sweep",
+        "run a study: methods x parameter ranges x maps x views from a JSON config into "
+        "--out (results.csv, tables.md, one row file per configuration; resumable)");
+    cmd->add_option("--config", a->config, "the study's JSON configuration (docs/studies.md)")
+        ->required();
+    cmd->add_option("--out", a->out, "output folder (created; a rerun resumes it)")
+        ->required();
+    cmd->add_option("--task-index", a->taskIndex,
+                    "this shard's index (default: $SLURM_ARRAY_TASK_ID, else 0)")
+        ->check(CLI::Range(0, 1000000));
+    cmd->add_option("--task-count", a->taskCount,
+                    "number of shards (default: $SLURM_ARRAY_TASK_COUNT, else 1)")
+        ->check(CLI::Range(1, 1000000));
+    cmd->add_option("--max-rows", a->maxRows,
+                    "stop after computing this many configurations (a partial run)")
+        ->check(CLI::Range(0, 100000000));
+    cmd->add_flag("--quiet", a->quiet, "print nothing on success, no progress bar");
+    cmd->callback([a] { RunSweepCommand(*a); });
+
+    auto parts = std::make_shared<std::vector<std::string>>();
+    auto out = std::make_shared<std::string>();
+    auto* merge = root.add_subcommand(
+        "merge", "join the folders of a sharded sweep (any order) into one sweep folder");
+    merge->add_option("--out", *out, "output folder")->required();
+    merge->add_option("parts", *parts, "the shards' --out folders")->required();
+    merge->callback([parts, out] { MergeSweeps(*parts, *out); });
+}
+
+}  // namespace reliefsim

@@ -1,0 +1,154 @@
+// `reliefsim sweep` / `merge` (app/sweep.h): the cross product, resumption, shards.
+#include "app/sweep.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.h"
+#include "tests/app/cli_util.h"
+
+namespace fs = std::filesystem;
+using namespace reliefsim;
+
+namespace {
+
+const char* kConfig = R"({
+  "size": "48x32", "threads": 1,
+  "maps": ["builtin:shapes:32", {"map": "builtin:noise:32"}],
+  "views": [{"view_angle": 45}, {"view_angle": 70, "azimuth": 30}],
+  "methods": [{"method": "relief", "set": {"linear_steps": [8, 16], "refine_steps": [0, 2]}},
+              {"method": "secant"}]
+})";
+
+std::string Read(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+/// results.csv without its timing columns (their values differ run to run).
+std::string WithoutTiming(const std::string& csv) {
+    std::vector<std::vector<std::string>> rows;
+    std::stringstream in(csv);
+    std::string line;
+    while (std::getline(in, line)) {
+        std::vector<std::string> cells;
+        std::stringstream l(line);
+        std::string c;
+        while (std::getline(l, c, ',')) cells.push_back(c);
+        rows.push_back(cells);
+    }
+    std::string out;
+    for (const auto& r : rows) {
+        for (size_t i = 0; i < r.size(); ++i)
+            if (rows[0][i].rfind("timing.", 0) != 0) out += r[i] + ",";
+        out += "\n";
+    }
+    return out;
+}
+
+fs::path Scratch() { return reliefsim::testing::Scratch("rs_sweep_"); }
+
+void ExpectConfigError(const std::string& text, const std::string& culprit) {
+    try {
+        ParseSweepConfig(text, "cfg");
+        ADD_FAILURE() << "accepted: " << text;
+    } catch (const Error& e) {
+        EXPECT_NE(std::string(e.what()).find(culprit), std::string::npos) << e.what();
+    }
+}
+
+}  // namespace
+
+TEST(Sweep, CrossesMapsViewsMethodsAndSetLists) {
+    const auto configs = ParseSweepConfig(kConfig, "cfg");
+    ASSERT_EQ(configs.size(), 2u * 2u * (4u + 1u));
+    EXPECT_EQ(configs[0].settings.set, (std::vector<std::string>{"linear_steps=8", "refine_steps=0"}));
+    EXPECT_EQ(configs[1].settings.set, (std::vector<std::string>{"linear_steps=8", "refine_steps=2"}));
+    EXPECT_EQ(configs[3].settings.set, (std::vector<std::string>{"linear_steps=16", "refine_steps=2"}));
+    EXPECT_EQ(configs[4].settings.method, "secant");
+    EXPECT_EQ(configs[5].settings.viewAngle, 70.0f);
+    EXPECT_EQ(configs[5].settings.azimuth, 30.0f);
+    EXPECT_EQ(configs[10].map, "builtin:noise:32");
+    EXPECT_EQ(configs[19].index, 19);
+    EXPECT_EQ(configs[0].settings.width, 48);
+}
+
+TEST(Sweep, BadConfigurationsNameTheCulprit) {
+    ExpectConfigError("{", "not valid JSON");
+    ExpectConfigError("[1]", "expected a JSON object");
+    ExpectConfigError(R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "colour": 1})",
+                      "\"colour\": unknown key; valid: size, maps");
+    ExpectConfigError(R"({"methods": [{"method": "relief"}]})", "no \"maps\"");
+    ExpectConfigError(R"({"maps": ["builtin:shapes"]})", "no \"methods\"");
+    ExpectConfigError(R"({"maps": [], "methods": [{"method": "relief"}]})", "non-empty list");
+    ExpectConfigError(R"({"maps": ["builtin:shapes"], "methods": [{"method": "cheese"}]})", "cheese");
+    ExpectConfigError(
+        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief", "set": {"steps": 3}}]})",
+        "steps");
+    ExpectConfigError(
+        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief", "set": {"linear_steps": []}}]})",
+        "empty list");
+    ExpectConfigError(
+        R"({"maps": ["builtin:shapes"], "views": [{"view_angle": 95}], "methods": [{"method": "relief"}]})",
+        "--view-angle 95");
+    ExpectConfigError(
+        R"({"maps": ["builtin:shapes"], "views": [{"filter": "bicubic"}], "methods": [{"method": "relief"}]})",
+        "\"bicubic\" is unknown");
+    ExpectConfigError(
+        R"({"maps": ["builtin:shapes"], "views": [{"camera": "ortho"}], "methods": [{"method": "relief"}]})",
+        "only the orbit camera");
+    ExpectConfigError(R"({"maps": [{"map": "x.png", "map_channel": "Q"}], "methods": [{"method": "relief"}]})",
+                      "\"Q\" is unknown");
+    ExpectConfigError(R"({"size": "0x3", "maps": ["builtin:shapes"], "methods": [{"method": "relief"}]})",
+                      "--size");
+}
+
+TEST(Sweep, ResumedRunEqualsAnUninterruptedOne) {
+    const fs::path d = Scratch();
+    SweepRunOptions partial;
+    partial.maxRows = 7;
+    EXPECT_EQ(RunSweep(kConfig, "cfg", (d / "a").string(), partial), 7);
+    EXPECT_TRUE(fs::exists(d / "a" / "results.csv"));  // the rows so far
+    EXPECT_EQ(RunSweep(kConfig, "cfg", (d / "a").string(), {}), 13);
+    EXPECT_EQ(RunSweep(kConfig, "cfg", (d / "a").string(), {}), 0);  // nothing left
+    EXPECT_EQ(RunSweep(kConfig, "cfg", (d / "b").string(), {}), 20);
+    const std::string a = Read(d / "a" / "results.csv"), b = Read(d / "b" / "results.csv");
+    EXPECT_EQ(WithoutTiming(a), WithoutTiming(b));
+    EXPECT_NE(a.find("index,map,map_channel,map_stores,view,method,set.linear_steps,"
+                     "set.refine_steps,"),
+              std::string::npos)
+        << a.substr(0, 200);
+    EXPECT_NE(a.find("mse_exact_depth"), std::string::npos);
+    EXPECT_EQ(std::count(a.begin(), a.end(), '\n'), 21);
+    EXPECT_NE(Read(d / "b" / "tables.md").find("| steps | avg steps per pixel | MSE |"),
+              std::string::npos);
+    // Another configuration in the same folder is refused.
+    EXPECT_THROW(RunSweep(R"({"maps": ["builtin:flat:16"], "methods": [{"method": "linear"}]})",
+                          "cfg", (d / "a").string(), {}),
+                 Error);
+}
+
+TEST(Sweep, ShardsMergedInAnyOrderEqualTheUnshardedRun) {
+    const fs::path d = Scratch();
+    RunSweep(kConfig, "cfg", (d / "whole").string(), {});
+    std::vector<std::string> parts;
+    for (int i = 0; i < 3; ++i) {
+        SweepRunOptions o;
+        o.taskIndex = i;
+        o.taskCount = 3;
+        const std::string dir = (d / ("part" + std::to_string(i))).string();
+        RunSweep(kConfig, "cfg", dir, o);
+        parts.push_back(dir);
+    }
+    MergeSweeps({parts[2], parts[0], parts[1]}, (d / "merged").string());
+    EXPECT_EQ(WithoutTiming(Read(d / "merged" / "results.csv")),
+              WithoutTiming(Read(d / "whole" / "results.csv")));
+    EXPECT_EQ(Read(d / "merged" / "sweep.json"), Read(d / "whole" / "sweep.json"));
+    // A missing shard is an error, not a silently shorter table.
+    EXPECT_THROW(MergeSweeps({parts[0], parts[1]}, (d / "short").string()), Error);
+}
