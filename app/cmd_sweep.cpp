@@ -53,7 +53,8 @@ void RunSweepCommand(const SweepArgs& a) {
     o.taskCount = a.taskCount >= 0 ? a.taskCount : EnvInt("SLURM_ARRAY_TASK_COUNT", 1);
     o.maxRows = a.maxRows;
     o.progress = !a.quiet && isatty(2);
-    const int n = RunSweep(ReadConfig(a.config), "--config \"" + a.config + "\"", a.out, o);
+    const int n =
+        RunSweep(ReadConfig(a.config), "--config \"" + a.config + "\"", a.out, o);
     if (!a.quiet)
         std::cout << "reliefsim sweep: " << n << " configurations computed (task "
                   << o.taskIndex << " of " << o.taskCount << "); wrote " << a.out
@@ -68,7 +69,8 @@ void RegisterSweepCommand(CLI::App& root) {
         "sweep",
         "run a study: methods x parameter ranges x maps x views from a JSON config into "
         "--out (results.csv, tables.md, one row file per configuration; resumable)");
-    cmd->add_option("--config", a->config, "the study's JSON configuration (docs/studies.md)")
+    cmd->add_option("--config", a->config,
+                    "the study's JSON configuration (docs/studies.md)")
         ->required();
     cmd->add_option("--out", a->out, "output folder (created; a rerun resumes it)")
         ->required();

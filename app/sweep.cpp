@@ -31,8 +31,8 @@ namespace {
 /// The render keys a view, or the top level, may set.
 const std::vector<std::string>& RenderKeys() {
     static const std::vector<std::string> kKeys = {
-        "view_angle", "azimuth", "distance", "fov",     "depth_scale", "tiling",
-        "filter",     "wrap",    "texture_format", "threads", "lanes", "camera"};
+        "view_angle", "azimuth", "distance",       "fov",     "depth_scale", "tiling",
+        "filter",     "wrap",    "texture_format", "threads", "lanes",       "camera"};
     return kKeys;
 }
 
@@ -69,14 +69,22 @@ E EnumValue(const EnumNames<E, N>& names, const ojson& v, const std::string& whe
 void ApplyRenderKey(RenderSettings& s, const std::string& key, const ojson& v,
                     const std::string& where) {
     const std::string at = where + " \"" + key + "\"";
-    if (key == "view_angle") s.viewAngle = float(Number(v, at));
-    else if (key == "azimuth") s.azimuth = float(Number(v, at));
-    else if (key == "distance") s.distance = float(Number(v, at));
-    else if (key == "fov") s.fovY = float(Number(v, at));
-    else if (key == "depth_scale") s.depthScale = float(Number(v, at));
-    else if (key == "tiling") s.tiling = float(Number(v, at));
-    else if (key == "filter") s.sampler.filter = EnumValue(kFilterNames, v, at);
-    else if (key == "wrap") s.sampler.wrap = EnumValue(kWrapModeNames, v, at);
+    if (key == "view_angle")
+        s.viewAngle = float(Number(v, at));
+    else if (key == "azimuth")
+        s.azimuth = float(Number(v, at));
+    else if (key == "distance")
+        s.distance = float(Number(v, at));
+    else if (key == "fov")
+        s.fovY = float(Number(v, at));
+    else if (key == "depth_scale")
+        s.depthScale = float(Number(v, at));
+    else if (key == "tiling")
+        s.tiling = float(Number(v, at));
+    else if (key == "filter")
+        s.sampler.filter = EnumValue(kFilterNames, v, at);
+    else if (key == "wrap")
+        s.sampler.wrap = EnumValue(kWrapModeNames, v, at);
     else if (key == "texture_format")
         s.sampler.precision = EnumValue(kTextureFormatNames, v, at);
     else if (key == "threads" || key == "lanes") {
@@ -86,8 +94,9 @@ void ApplyRenderKey(RenderSettings& s, const std::string& key, const ojson& v,
     } else if (key == "camera") {
         const std::string c = Text(v, at);
         if (c != "orbit")
-            Bad(at, "\"" + c + "\": only the orbit camera is available so far (the "
-                               "orthographic texture-space view is not built yet)");
+            Bad(at, "\"" + c +
+                        "\": only the orbit camera is available so far (the "
+                        "orthographic texture-space view is not built yet)");
     } else {
         Bad(at, "unknown key; valid: " + Join(RenderKeys()));
     }
@@ -118,7 +127,8 @@ MapEntry ParseMap(const ojson& m, const std::string& where) {
         e.map = m.get<std::string>();
     } else if (m.is_object()) {
         for (const auto& [k, v] : m.items()) {
-            if (k == "map") e.map = Text(v, where + " \"map\"");
+            if (k == "map")
+                e.map = Text(v, where + " \"map\"");
             else if (k == "map_channel") {
                 e.channel = Text(v, where + " \"map_channel\"");
                 EnumValue(kChannelNames, v, where + " \"map_channel\"");
@@ -126,7 +136,8 @@ MapEntry ParseMap(const ojson& m, const std::string& where) {
                 e.stores = Text(v, where + " \"map_stores\"");
                 EnumValue(kStoresNames, v, where + " \"map_stores\"");
             } else {
-                Bad(where + " \"" + k + "\"", "unknown key; valid: map, map_channel, map_stores");
+                Bad(where + " \"" + k + "\"",
+                    "unknown key; valid: map, map_channel, map_stores");
             }
         }
     } else {
@@ -137,8 +148,8 @@ MapEntry ParseMap(const ojson& m, const std::string& where) {
 }
 
 /// The crossed values of a method's "set": every combination, the last key fastest.
-std::vector<std::vector<std::pair<std::string, double>>> CrossSet(const ojson& set,
-                                                                  const std::string& where) {
+std::vector<std::vector<std::pair<std::string, double>>> CrossSet(
+    const ojson& set, const std::string& where) {
     std::vector<std::vector<std::pair<std::string, double>>> combos = {{}};
     if (set.is_null()) return combos;
     if (!set.is_object()) Bad(where, "expected an object of key: value or [values]");
@@ -167,11 +178,14 @@ std::vector<std::vector<std::pair<std::string, double>>> CrossSet(const ojson& s
 
 /// The leaves of a JSON value with their dotted paths, in the value's order.
 template <class J>
-void Flatten(const J& v, const std::string& path, std::vector<std::pair<std::string, std::string>>& out) {
+void Flatten(const J& v, const std::string& path,
+             std::vector<std::pair<std::string, std::string>>& out) {
     if (v.is_object()) {
-        for (const auto& [k, x] : v.items()) Flatten(x, path.empty() ? k : path + "." + k, out);
+        for (const auto& [k, x] : v.items())
+            Flatten(x, path.empty() ? k : path + "." + k, out);
     } else if (v.is_array()) {
-        for (size_t i = 0; i < v.size(); ++i) Flatten(v[i], path + "." + std::to_string(i), out);
+        for (size_t i = 0; i < v.size(); ++i)
+            Flatten(v[i], path + "." + std::to_string(i), out);
     } else if (v.is_string()) {
         out.emplace_back(path, v.template get<std::string>());
     } else if (v.is_null()) {
@@ -246,15 +260,17 @@ void WriteSummaries(const fs::path& dir, const std::map<int, ojson>& byIndex) {
 
 void ProgressBar(int done, int total, const std::string& what) {
     const int width = 30, filled = total > 0 ? done * width / total : width;
-    std::fprintf(stderr, "\r[%s%s] %d/%d %-40.40s", std::string(size_t(filled), '#').c_str(),
-                 std::string(size_t(width - filled), ' ').c_str(), done, total, what.c_str());
+    std::fprintf(
+        stderr, "\r[%s%s] %d/%d %-40.40s", std::string(size_t(filled), '#').c_str(),
+        std::string(size_t(width - filled), ' ').c_str(), done, total, what.c_str());
     if (done == total) std::fprintf(stderr, "\n");
     std::fflush(stderr);
 }
 
 }  // namespace
 
-std::vector<SweepConfig> ParseSweepConfig(const std::string& text, const std::string& subject) {
+std::vector<SweepConfig> ParseSweepConfig(const std::string& text,
+                                          const std::string& subject) {
     ojson root;
     try {
         root = ojson::parse(text);
@@ -283,12 +299,14 @@ std::vector<SweepConfig> ParseSweepConfig(const std::string& text, const std::st
                 views.push_back(x);
             }
         } else if (key == "methods") {
-            if (!v.is_array() || v.empty()) Bad(at, "expected a non-empty list of methods");
+            if (!v.is_array() || v.empty())
+                Bad(at, "expected a non-empty list of methods");
             methods = &v;
         } else if (IsRenderKey(key)) {
             ApplyRenderKey(base, key, v, subject);
         } else {
-            Bad(at, "unknown key; valid: size, maps, views, methods, " + Join(RenderKeys()));
+            Bad(at,
+                "unknown key; valid: size, maps, views, methods, " + Join(RenderKeys()));
         }
     }
     if (maps.empty()) Bad(subject, "no \"maps\"");
@@ -298,10 +316,12 @@ std::vector<SweepConfig> ParseSweepConfig(const std::string& text, const std::st
         for (size_t vi = 0; vi < views.size(); ++vi) {
             RenderSettings viewSettings = base;
             const std::string vat = subject + " \"views\" [" + std::to_string(vi) + "]";
-            for (const auto& [k, x] : views[vi].items()) ApplyRenderKey(viewSettings, k, x, vat);
+            for (const auto& [k, x] : views[vi].items())
+                ApplyRenderKey(viewSettings, k, x, vat);
             for (size_t ki = 0; ki < methods->size(); ++ki) {
                 const ojson& m = (*methods)[ki];
-                const std::string mat = subject + " \"methods\" [" + std::to_string(ki) + "]";
+                const std::string mat =
+                    subject + " \"methods\" [" + std::to_string(ki) + "]";
                 if (!m.is_object() || !m.contains("method"))
                     Bad(mat, "expected {\"method\": NAME, \"set\": {...}}");
                 for (const auto& [k, x] : m.items())
@@ -333,7 +353,8 @@ std::vector<SweepConfig> ParseSweepConfig(const std::string& text, const std::st
                     try {
                         ValidateSettings(c.settings);
                     } catch (const Error& e) {
-                        Bad(mat + " (configuration " + std::to_string(c.index) + ")", e.what());
+                        Bad(mat + " (configuration " + std::to_string(c.index) + ")",
+                            e.what());
                     }
                     configs.push_back(std::move(c));
                 }
@@ -370,7 +391,8 @@ std::string SweepCsv(const std::vector<ojson>& rows) {
         std::map<std::string, std::string> byName(row.begin(), row.end());
         for (size_t i = 0; i < header.size(); ++i) {
             auto it = byName.find(header[i]);
-            csv += (i ? "," : "") + (it == byName.end() ? std::string() : CsvCell(it->second));
+            csv += (i ? "," : "") +
+                   (it == byName.end() ? std::string() : CsvCell(it->second));
         }
         csv += "\n";
     }
@@ -378,25 +400,29 @@ std::string SweepCsv(const std::vector<ojson>& rows) {
 }
 
 std::string SweepTables(const std::vector<ojson>& rows) {
-    std::string md = "# Sweep results\n\nOne table per map, view and method, in the "
-                     "dissertation's layout; MSE is its metric (`mse_paper`), exact MSE and "
-                     "missed pixels are against the exact reference; time is the frame loop.\n";
+    std::string md =
+        "# Sweep results\n\nOne table per map, view and method, in the "
+        "dissertation's layout; MSE is its metric (`mse_paper`), exact MSE and "
+        "missed pixels are against the exact reference; time is the frame loop.\n";
     std::string last;
     for (const ojson& r : rows) {
         const ojson& c = r["columns"];
         const ojson& m = r["metrics"];
         const std::string group = c["map"].get<std::string>() + " | view " +
-                                  c["view"].dump() + " | " + c["method"].get<std::string>();
+                                  c["view"].dump() + " | " +
+                                  c["method"].get<std::string>();
         if (group != last) {
             md += "\n## " + c["method"].get<std::string>() + " on " +
                   c["map"].get<std::string>() + ", view " + c["view"].dump() + "\n\n" +
-                  "| steps | avg steps per pixel | MSE | exact MSE | missed pixels | time (ms) |\n"
+                  "| steps | avg steps per pixel | MSE | exact MSE | missed pixels | "
+                  "time (ms) |\n"
                   "|---|---|---|---|---|---|\n";
             last = group;
         }
         std::string steps;
         for (const auto& [k, v] : c.items())
-            if (k.rfind("set.", 0) == 0) steps += (steps.empty() ? "" : ", ") + k.substr(4) + "=" + v.dump();
+            if (k.rfind("set.", 0) == 0)
+                steps += (steps.empty() ? "" : ", ") + k.substr(4) + "=" + v.dump();
         char line[256];
         auto num = [&](const char* key) {
             return m.contains(key) && m[key].is_number() ? m[key].get<double>() : 0.0;
@@ -407,8 +433,9 @@ std::string SweepTables(const std::vector<ojson>& rows) {
                       m.contains("missed_geometry_pixels")
                           ? m["missed_geometry_pixels"].dump().c_str()
                           : "",
-                      m.contains("timing") ? m["timing"]["frame_seconds"].get<double>() * 1e3
-                                           : 0.0);
+                      m.contains("timing")
+                          ? m["timing"]["frame_seconds"].get<double>() * 1e3
+                          : 0.0);
         md += line;
     }
     return md;
@@ -427,12 +454,15 @@ int RunSweep(const std::string& configText, const std::string& subject,
     const std::string canonical = CanonicalConfig(configText);
     const fs::path stored = dir / "sweep.json";
     if (fs::exists(stored, ec) && ReadText(stored, "sweep") != canonical)
-        throw Error("--out \"" + outDir +
-                    "\": holds a sweep of another configuration (its sweep.json differs); "
-                    "use a new folder");
+        throw Error(
+            "--out \"" + outDir +
+            "\": holds a sweep of another configuration (its sweep.json differs); "
+            "use a new folder");
     // Every map is loaded (and so checked) before any row is computed.
     std::map<std::string, DepthField> fields;
-    auto key = [](const SweepConfig& c) { return c.map + "\n" + c.mapChannel + "\n" + c.mapStores; };
+    auto key = [](const SweepConfig& c) {
+        return c.map + "\n" + c.mapChannel + "\n" + c.mapStores;
+    };
     for (const SweepConfig& c : configs) {
         if (c.index % o.taskCount != o.taskIndex || fields.count(key(c))) continue;
         MapLoadOptions lo;

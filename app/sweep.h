@@ -18,8 +18,9 @@ namespace reliefsim {
 /// One configuration of a sweep: its index in the cross product and what it renders.
 struct SweepConfig {
     int index = 0;
-    nlohmann::ordered_json columns;  ///< the configuration's keys, as results.csv shows them
-    std::string map;                 ///< file path or builtin:NAME[:SIZE]
+    nlohmann::ordered_json
+        columns;      ///< the configuration's keys, as results.csv shows them
+    std::string map;  ///< file path or builtin:NAME[:SIZE]
     std::string mapChannel = "auto", mapStores = "height";
     RenderSettings settings;
 };
@@ -28,7 +29,8 @@ struct SweepConfig {
 /// in errors) into its configurations, in order: maps x views x methods x the crossed
 /// `set` lists of each method. Every setting is validated (ValidateSettings) before any
 /// work; unknown keys are listed with the valid ones. Throws Error.
-std::vector<SweepConfig> ParseSweepConfig(const std::string& text, const std::string& subject);
+std::vector<SweepConfig> ParseSweepConfig(const std::string& text,
+                                          const std::string& subject);
 
 struct SweepRunOptions {
     int taskIndex = 0, taskCount = 1;  ///< this shard: configurations with index % count

@@ -11,12 +11,6 @@
 
 namespace reliefsim {
 
-namespace {
-/// Depth below which the ray counts as outside the relief for the missed-geometry test
-/// (float rounding of the kernels' hits is about 1e-7).
-constexpr double kLeaveTolerance = 1e-6;
-}  // namespace
-
 double CoarseStepDepth(const RenderSettings& s) {
     if (s.method == kExactMethod) return 0.0;
     const Kernel kernel = SettingsKernel(s);
@@ -70,12 +64,13 @@ ReferenceRecord RenderReference(const DepthField& field, const RenderSettings& s
             const double tHit = record.hitDepth[i], tRef = depth[k];
             if (!(tHit - tRef > step)) continue;
             const MarchInput in = PixelToRay(view, px[k], py[k]);
-            ref.missed[i] = MissedGeometry(tHit, tRef, step,
-                                           surface.LeavesBetween(
-                                               in.uvEntry.x, in.uvEntry.y, in.dirUv.x,
-                                               in.dirUv.y, tRef, tHit, kLeaveTolerance))
-                                ? 1
-                                : 0;
+            ref.missed[i] =
+                MissedGeometry(tHit, tRef, step,
+                               surface.LeavesBetween(in.uvEntry.x, in.uvEntry.y,
+                                                     in.dirUv.x, in.dirUv.y, tRef, tHit,
+                                                     kReferenceLeaveTolerance))
+                    ? 1
+                    : 0;
         }
     });
     ref.seconds =

@@ -8,6 +8,10 @@
 
 namespace reliefsim {
 
+/// Depth below which a ray counts as outside the relief in the missed-geometry test
+/// (ExactSurface::LeavesBetween; float rounding of the kernels' hits is about 1e-7).
+inline constexpr double kReferenceLeaveTolerance = 1e-6;
+
 /// One coarse step's depth of the settings' kernel: 1 / linear_steps for the kernels
 /// that step linearly (those with a `linear_steps` parameter), 0 for the others and for
 /// the exact method.

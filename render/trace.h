@@ -21,11 +21,23 @@ struct PixelTrace {
     MarchResult result;
     FetchCounts counts;
     std::vector<TraceFetch> fetches;
-    /// Method exact (metrics/exact.h): no fetches; the hit in double and the cells whose
-    /// quadratic was solved (result holds the hit as the record stores it).
+    /// Method exact (metrics/exact.h): no fetches; result holds the hit as the record
+    /// stores it, reference the same hit in double.
     bool exact = false;
-    double exactT = 0.0, exactU = 0.0, exactV = 0.0;
+    /// The exact first hit of the same ray (every method), and the pixel's errors against
+    /// it as the frame's reference pass computes them (render/reference.h).
+    struct Reference {
+        double t = 0, u = 0, v = 0;  ///< in double
+        uint32_t cells = 0;          ///< bilinear cells solved
+        double depthError = 0;       ///< hit depth - exact depth (both as floats)
+        double uvErrorTexels = 0;
+        bool missedGeometry = false;
+    } reference;
 };
+
+/// The trace as JSON (`trace --json`): pixel, ray, fetches (u, v, t, sampled, inside),
+/// result, reference.
+std::string TraceJson(const PixelTrace& trace);
 
 /// Runs the settings' kernel for pixel (x, y) alone, recording every fetch. The kernel,
 /// sampler and inputs are those of Render(), so the result equals the frame's record at

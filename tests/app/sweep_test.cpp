@@ -67,9 +67,12 @@ void ExpectConfigError(const std::string& text, const std::string& culprit) {
 TEST(Sweep, CrossesMapsViewsMethodsAndSetLists) {
     const auto configs = ParseSweepConfig(kConfig, "cfg");
     ASSERT_EQ(configs.size(), 2u * 2u * (4u + 1u));
-    EXPECT_EQ(configs[0].settings.set, (std::vector<std::string>{"linear_steps=8", "refine_steps=0"}));
-    EXPECT_EQ(configs[1].settings.set, (std::vector<std::string>{"linear_steps=8", "refine_steps=2"}));
-    EXPECT_EQ(configs[3].settings.set, (std::vector<std::string>{"linear_steps=16", "refine_steps=2"}));
+    EXPECT_EQ(configs[0].settings.set,
+              (std::vector<std::string>{"linear_steps=8", "refine_steps=0"}));
+    EXPECT_EQ(configs[1].settings.set,
+              (std::vector<std::string>{"linear_steps=8", "refine_steps=2"}));
+    EXPECT_EQ(configs[3].settings.set,
+              (std::vector<std::string>{"linear_steps=16", "refine_steps=2"}));
     EXPECT_EQ(configs[4].settings.method, "secant");
     EXPECT_EQ(configs[5].settings.viewAngle, 70.0f);
     EXPECT_EQ(configs[5].settings.azimuth, 30.0f);
@@ -81,12 +84,15 @@ TEST(Sweep, CrossesMapsViewsMethodsAndSetLists) {
 TEST(Sweep, BadConfigurationsNameTheCulprit) {
     ExpectConfigError("{", "not valid JSON");
     ExpectConfigError("[1]", "expected a JSON object");
-    ExpectConfigError(R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "colour": 1})",
-                      "\"colour\": unknown key; valid: size, maps");
+    ExpectConfigError(
+        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "colour": 1})",
+        "\"colour\": unknown key; valid: size, maps");
     ExpectConfigError(R"({"methods": [{"method": "relief"}]})", "no \"maps\"");
     ExpectConfigError(R"({"maps": ["builtin:shapes"]})", "no \"methods\"");
-    ExpectConfigError(R"({"maps": [], "methods": [{"method": "relief"}]})", "non-empty list");
-    ExpectConfigError(R"({"maps": ["builtin:shapes"], "methods": [{"method": "cheese"}]})", "cheese");
+    ExpectConfigError(R"({"maps": [], "methods": [{"method": "relief"}]})",
+                      "non-empty list");
+    ExpectConfigError(
+        R"({"maps": ["builtin:shapes"], "methods": [{"method": "cheese"}]})", "cheese");
     ExpectConfigError(
         R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief", "set": {"steps": 3}}]})",
         "steps");
@@ -102,10 +108,12 @@ TEST(Sweep, BadConfigurationsNameTheCulprit) {
     ExpectConfigError(
         R"({"maps": ["builtin:shapes"], "views": [{"camera": "ortho"}], "methods": [{"method": "relief"}]})",
         "only the orbit camera");
-    ExpectConfigError(R"({"maps": [{"map": "x.png", "map_channel": "Q"}], "methods": [{"method": "relief"}]})",
-                      "\"Q\" is unknown");
-    ExpectConfigError(R"({"size": "0x3", "maps": ["builtin:shapes"], "methods": [{"method": "relief"}]})",
-                      "--size");
+    ExpectConfigError(
+        R"({"maps": [{"map": "x.png", "map_channel": "Q"}], "methods": [{"method": "relief"}]})",
+        "\"Q\" is unknown");
+    ExpectConfigError(
+        R"({"size": "0x3", "maps": ["builtin:shapes"], "methods": [{"method": "relief"}]})",
+        "--size");
 }
 
 TEST(Sweep, ResumedRunEqualsAnUninterruptedOne) {
@@ -117,7 +125,8 @@ TEST(Sweep, ResumedRunEqualsAnUninterruptedOne) {
     EXPECT_EQ(RunSweep(kConfig, "cfg", (d / "a").string(), {}), 13);
     EXPECT_EQ(RunSweep(kConfig, "cfg", (d / "a").string(), {}), 0);  // nothing left
     EXPECT_EQ(RunSweep(kConfig, "cfg", (d / "b").string(), {}), 20);
-    const std::string a = Read(d / "a" / "results.csv"), b = Read(d / "b" / "results.csv");
+    const std::string a = Read(d / "a" / "results.csv"),
+                      b = Read(d / "b" / "results.csv");
     EXPECT_EQ(WithoutTiming(a), WithoutTiming(b));
     EXPECT_NE(a.find("index,map,map_channel,map_stores,view,method,set.linear_steps,"
                      "set.refine_steps,"),
@@ -128,9 +137,10 @@ TEST(Sweep, ResumedRunEqualsAnUninterruptedOne) {
     EXPECT_NE(Read(d / "b" / "tables.md").find("| steps | avg steps per pixel | MSE |"),
               std::string::npos);
     // Another configuration in the same folder is refused.
-    EXPECT_THROW(RunSweep(R"({"maps": ["builtin:flat:16"], "methods": [{"method": "linear"}]})",
-                          "cfg", (d / "a").string(), {}),
-                 Error);
+    EXPECT_THROW(
+        RunSweep(R"({"maps": ["builtin:flat:16"], "methods": [{"method": "linear"}]})",
+                 "cfg", (d / "a").string(), {}),
+        Error);
 }
 
 TEST(Sweep, ShardsMergedInAnyOrderEqualTheUnshardedRun) {

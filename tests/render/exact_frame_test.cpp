@@ -148,3 +148,34 @@ TEST(ReferencePass, MissedGeometryOnARidge) {
     EXPECT_EQ(f.referenceSummary.missedGeometryPixels, 0u);
     EXPECT_GT(f.referenceSummary.depthErrorMean, 0.0);  // it overshoots by up to a step
 }
+
+// trace shows the pixel's errors against the reference as the frame's pass computed them.
+TEST(ReferencePass, TraceShowsTheFramesReferenceErrors) {
+    DepthField ridge;
+    ridge.width = ridge.height = 64;
+    ridge.name = "ridge";
+    ridge.depth.assign(64 * 64, 1.0f);
+    for (int j = 0; j < 64; ++j) ridge.depth[size_t(j) * 64 + 32] = 0.0f;
+    RenderSettings s = Settings("linear");
+    s.azimuth = 90.0f;
+    s.set = {"linear_steps=4"};
+    const RenderOutput out = Render(ridge, s);
+    int missed = 0, checked = 0;
+    for (int y = 0; y < s.height; y += 3)
+        for (int x = 0; x < s.width; x += 3) {
+            const size_t i = out.record.Index(x, y);
+            if (!out.record.Covered(i)) continue;
+            const PixelTrace t = TracePixel(ridge, s, x, y);
+            ++checked;
+            missed += t.reference.missedGeometry;
+            ASSERT_EQ(t.reference.missedGeometry, out.reference.missed[i] != 0)
+                << x << "," << y;
+            ASSERT_EQ(float(t.reference.t), out.reference.depth[i]);
+            ASSERT_EQ(t.reference.depthError,
+                      double(out.record.hitDepth[i]) - double(out.reference.depth[i]));
+        }
+    EXPECT_GT(checked, 300);
+    EXPECT_GT(missed, 0);
+    EXPECT_NE(TraceJson(TracePixel(ridge, s, 40, 30)).find("\"missed_geometry\""),
+              std::string::npos);
+}
