@@ -72,6 +72,16 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
         ->capture_default_str();
     cmd->add_option("--tiling", o.settings.tiling, "texture repeats across the plane")
         ->capture_default_str();
+    AddEnumOption(cmd, "--camera", o.settings.camera, kCameraNames,
+                  "orbit (--view-angle, --azimuth, --distance, --fov) or ortho: the "
+                  "texture-space view of one tile, pixel (x, y) at uv ((x+0.5)/W, "
+                  "(y+0.5)/H), one ray direction (--view-dir)");
+    o.viewDirOption =
+        cmd->add_option("--view-dir", o.viewDir,
+                        "ortho camera: tangent-space direction from the eye towards the "
+                        "surface, X,Y,Z with Z < 0")
+            ->type_name("X,Y,Z")
+            ->default_str("0,0,-1");
     AddEnumOption(cmd, "--filter", o.settings.sampler.filter, kFilterNames,
                   "height sampler filter");
     AddEnumOption(cmd, "--wrap", o.settings.sampler.wrap, kWrapModeNames,
@@ -109,6 +119,28 @@ void ResolveRenderSettings(RenderOptions& o) {
     ParseSize(o.size, s.width, s.height);
     ParseScale("--iterations-scale", o.iterScale, s.iterScaleMin, s.iterScaleMax);
     ParseScale("--fetches-scale", o.fetchScale, s.fetchScaleMin, s.fetchScaleMax);
+    if (!o.viewDir.empty()) {
+        if (s.camera != CameraKind::Ortho)
+            throw Error("--view-dir " + o.viewDir + ": applies to --camera ortho");
+        std::vector<float> c;
+        size_t start = 0;
+        for (;;) {
+            const size_t comma = o.viewDir.find(',', start);
+            const auto part = std::string_view(o.viewDir).substr(
+                start, comma == std::string::npos ? std::string::npos : comma - start);
+            const std::optional<float> f = ParseFiniteFloat(part);
+            if (!f)
+                throw Error("--view-dir \"" + o.viewDir +
+                            "\": expected X,Y,Z, three numbers");
+            c.push_back(*f);
+            if (comma == std::string::npos) break;
+            start = comma + 1;
+        }
+        if (c.size() != 3)
+            throw Error("--view-dir \"" + o.viewDir +
+                        "\": expected X,Y,Z, three numbers");
+        s.viewDir = glm::vec3(c[0], c[1], c[2]);
+    }
     ValidateSettings(s);
 }
 

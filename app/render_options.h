@@ -26,6 +26,8 @@ struct RenderOptions {
     RenderSettings settings;
     std::string size = SizeText(settings.width, settings.height);  ///< WxH
     std::string iterScale, fetchScale;  ///< MIN:MAX; empty: the settings' scale
+    std::string viewDir;                ///< X,Y,Z (--view-dir); empty: the settings'
+    const CLI::Option* viewDirOption = nullptr;
 };
 
 /// Adds render's scene options (map, method, set, size, camera, sampler, texture format,

@@ -32,7 +32,8 @@ namespace {
 const std::vector<std::string>& RenderKeys() {
     static const std::vector<std::string> kKeys = {
         "view_angle", "azimuth", "distance",       "fov",     "depth_scale", "tiling",
-        "filter",     "wrap",    "texture_format", "threads", "lanes",       "camera"};
+        "filter",     "wrap",    "texture_format", "threads", "lanes",       "camera",
+        "view_dir"};
     return kKeys;
 }
 
@@ -92,11 +93,12 @@ void ApplyRenderKey(RenderSettings& s, const std::string& key, const ojson& v,
         if (n != double(int(n))) Bad(at, "expected an integer, got " + v.dump());
         (key == "threads" ? s.threads : s.lanes) = int(n);
     } else if (key == "camera") {
-        const std::string c = Text(v, at);
-        if (c != "orbit")
-            Bad(at, "\"" + c +
-                        "\": only the orbit camera is available so far (the "
-                        "orthographic texture-space view is not built yet)");
+        s.camera = EnumValue(kCameraNames, v, at);
+    } else if (key == "view_dir") {
+        if (!v.is_array() || v.size() != 3)
+            Bad(at, "expected [X, Y, Z], got " + v.dump());
+        s.viewDir = glm::vec3(float(Number(v[0], at)), float(Number(v[1], at)),
+                              float(Number(v[2], at)));
     } else {
         Bad(at, "unknown key; valid: " + Join(RenderKeys()));
     }

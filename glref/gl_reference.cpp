@@ -370,6 +370,8 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     glUniform1f(loc("uHeight"), u.height);
     glUniform1f(loc("uTiling"), u.tiling);
     glUniform1f(loc("uDepthScale"), u.depthScale);
+    glUniform1i(loc("uOrtho"), u.ortho);
+    glUniform2f(loc("uOrthoDirUv"), u.orthoDu, u.orthoDv);
     glUniform1i(loc("uHeights"), 0);
     UploadKernelUniforms(m.program, scene.kernel);
 

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 #include <set>
 
@@ -51,14 +52,15 @@ void WriteStaged(const std::string& what, const std::string& path, OutputSet* ou
 /// the given OIIO format, converting to spec.format. Returns "" on success, else the
 /// reason.
 std::string WriteImageFile(const std::string& tempPath, const char* format,
-                           const OIIO::ImageSpec& spec, const float* pixels) {
+                           const OIIO::ImageSpec& spec, const void* pixels,
+                           OIIO::TypeDesc type = OIIO::TypeDesc::FLOAT) {
     auto out = OIIO::ImageOutput::create(format);
     if (!out) return "no " + std::string(format) + " writer: " + OIIO::geterror();
     if (!out->open(tempPath, spec)) {
         std::string err = out->geterror();
         return err.empty() ? OIIO::geterror() : err;
     }
-    const bool ok = out->write_image(OIIO::TypeDesc::FLOAT, pixels);
+    const bool ok = out->write_image(type, pixels);
     std::string err = ok ? std::string() : out->geterror();
     if (!out->close() && err.empty()) err = out->geterror();
     if (!ok && err.empty()) err = "write_image failed";
@@ -352,31 +354,61 @@ void WriteColorPng(const std::string& path, const float* rgb, int width, int hei
 void WriteMultiChannelExr(const std::string& path, int width, int height,
                           const std::vector<std::string>& channelNames,
                           const std::vector<const float*>& planes, OutputSet* outputs) {
-    CheckSize("exr", path, width, height);
-    if (channelNames.empty() || channelNames.size() != planes.size())
+    if (channelNames.size() != planes.size())
         throw Error("exr " + Quote(path) + ": " + std::to_string(channelNames.size()) +
                     " channel names for " + std::to_string(planes.size()) +
                     " planes; expected one name per plane and at least one plane");
+    std::vector<ExrChannel> channels;
+    for (size_t c = 0; c < planes.size(); ++c)
+        channels.push_back({channelNames[c], planes[c], nullptr});
+    WriteMultiChannelExr(path, width, height, channels, outputs);
+}
+
+void WriteMultiChannelExr(const std::string& path, int width, int height,
+                          const std::vector<ExrChannel>& channels, OutputSet* outputs) {
+    CheckSize("exr", path, width, height);
+    if (channels.empty())
+        throw Error("exr " + Quote(path) +
+                    ": 0 channels; expected one name per plane and at least one plane");
     std::set<std::string> seen;
     std::string order;
-    for (size_t c = 0; c < planes.size(); ++c) {
-        const std::string& name = channelNames[c];
+    std::vector<std::string> names;
+    std::vector<OIIO::TypeDesc> formats;
+    for (size_t c = 0; c < channels.size(); ++c) {
+        const std::string& name = channels[c].name;
         if (name.empty() || name.find('\n') != std::string::npos ||
             !seen.insert(name).second)
             throw Error("exr " + Quote(path) + ": channel name " + Quote(name) +
                         " is empty, repeated or has a newline; expected unique names");
-        if (!planes[c])
+        if (!channels[c].values == !channels[c].counts)
             throw Error("exr " + Quote(path) + ": plane " + Quote(name) +
-                        " is null; expected width*height floats");
+                        " is null; expected width*height floats or counts");
         order += (c ? "\n" : "") + name;
+        names.push_back(name);
+        formats.push_back(channels[c].counts ? OIIO::TypeDesc::UINT32
+                                             : OIIO::TypeDesc::FLOAT);
     }
-    const size_t n = size_t(width) * size_t(height), nc = planes.size();
-    std::vector<float> interleaved(n * nc);
-    for (size_t i = 0; i < n; ++i)
-        for (size_t c = 0; c < nc; ++c) interleaved[i * nc + c] = planes[c][i];
-
+    // Both pixel types are 4 bytes: each pixel's channels are 32-bit words, in the
+    // channels' native formats (what write_image takes for per-channel formats).
+    const size_t n = size_t(width) * size_t(height), nc = channels.size();
+    std::vector<uint32_t> interleaved(n * nc);
+    for (size_t c = 0; c < nc; ++c) {
+        const ExrChannel& ch = channels[c];
+        for (size_t i = 0; i < n; ++i) {
+            uint32_t word;
+            if (ch.counts)
+                word = ch.counts[i];
+            else
+                std::memcpy(&word, &ch.values[i], sizeof word);
+            interleaved[i * nc + c] = word;
+        }
+    }
+    const bool mixed =
+        std::any_of(channels.begin(), channels.end(),
+                    [](const ExrChannel& ch) { return ch.counts != nullptr; });
     OIIO::ImageSpec spec(width, height, int(nc), OIIO::TypeDesc::FLOAT);
-    spec.channelnames = channelNames;
+    spec.channelnames = names;
+    if (mixed) spec.channelformats = formats;
     spec.alpha_channel = -1;  // a channel named "A" is data here, not coverage
     spec.attribute("compression", "zip");
     spec.attribute(kChannelOrderAttr, order);
@@ -384,7 +416,8 @@ void WriteMultiChannelExr(const std::string& path, int width, int height,
     // value writes none, so the same record gives the same bytes on every run.
     spec.attribute("DateTime", "");
     WriteStaged("exr", path, outputs, [&](const std::string& tempPath) {
-        return WriteImageFile(tempPath, "openexr", spec, interleaved.data());
+        return WriteImageFile(tempPath, "openexr", spec, interleaved.data(),
+                              mixed ? OIIO::TypeDesc::UNKNOWN : OIIO::TypeDesc::FLOAT);
     });
 }
 
@@ -396,10 +429,32 @@ ExrPlanes ReadMultiChannelExr(const std::string& path) {
     const OIIO::ImageSpec spec = in->spec();
     const int nc = spec.nchannels;
     const size_t n = size_t(spec.width) * size_t(spec.height);
+    // UINT channels (counts) are read as their integers: OpenImageIO's conversion to
+    // float would normalise them to [0, 1]. A file of FLOAT and UINT channels only is
+    // read in its native 4-byte words; anything else is converted to float.
+    auto isUint = [&](int c) {
+        return size_t(c) < spec.channelformats.size() &&
+               spec.channelformats[size_t(c)] == OIIO::TypeDesc::UINT32;
+    };
+    bool native = !spec.channelformats.empty();
+    for (int c = 0; c < nc && native; ++c)
+        native = isUint(c) || spec.channelformats[size_t(c)] == OIIO::TypeDesc::FLOAT;
     std::vector<float> interleaved(n * size_t(nc));
-    if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, interleaved.data()))
+    if (!in->read_image(0, 0, 0, nc,
+                        native ? OIIO::TypeDesc::UNKNOWN : OIIO::TypeDesc::FLOAT,
+                        interleaved.data()))
         throw Error("exr " + Quote(path) + ": cannot read pixels (" + in->geterror() +
                     "); expected an intact file");
+    if (native)
+        for (int c = 0; c < nc; ++c) {
+            if (!isUint(c)) continue;
+            for (size_t i = 0; i < n; ++i) {
+                float& v = interleaved[i * size_t(nc) + size_t(c)];
+                uint32_t word;
+                std::memcpy(&word, &v, sizeof word);
+                v = float(word);
+            }
+        }
 
     ExrPlanes result;
     result.width = spec.width;

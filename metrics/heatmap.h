@@ -75,6 +75,19 @@ void WriteMultiChannelExr(const std::string& path, int width, int height,
                           const std::vector<const float*>& planes,
                           OutputSet* outputs = nullptr);
 
+/// One channel of WriteMultiChannelExr: width x height values, either floats (stored as
+/// FLOAT) or counts (stored as 32-bit UINT, which EXR has: exact at any size).
+struct ExrChannel {
+    std::string name;
+    const float* values = nullptr;
+    const uint32_t* counts = nullptr;
+};
+
+/// WriteMultiChannelExr with a pixel type per channel (FLOAT or UINT).
+void WriteMultiChannelExr(const std::string& path, int width, int height,
+                          const std::vector<ExrChannel>& channels,
+                          OutputSet* outputs = nullptr);
+
 /// The contents of a multi-channel EXR: planes[i] (width x height floats, row 0 at the
 /// top) is the channel called names[i].
 struct ExrPlanes {
@@ -83,7 +96,8 @@ struct ExrPlanes {
     std::vector<std::vector<float>> planes;  // one plane per name, same order
 };
 
-/// Reads an EXR (or any image OIIO reads) as float planes: in the order written by
+/// Reads an EXR (or any image OIIO reads) as float planes (UINT channels converted: exact
+/// below 2^24): in the order written by
 /// WriteMultiChannelExr when the file carries that order, else in file order. Values are
 /// bit-exact for float32 files. Throws Error naming the path on failure.
 ExrPlanes ReadMultiChannelExr(const std::string& path);

@@ -50,4 +50,17 @@ Camera MakeOrbitCamera(float viewAngleDeg, float azimuthDeg, float distance,
     return cam;
 }
 
+Camera MakeTileOrthoCamera() {
+    Camera cam;
+    cam.eye = glm::vec3(0.0f, 0.0f, 1.0f);
+    cam.viewFromWorld =
+        glm::lookAtRH(cam.eye, glm::vec3(0.0f), glm::vec3(0.0f, 1.0f, 0.0f));
+    cam.aspect = 1.0f;
+    cam.nearZ = 0.5f;
+    cam.farZ = 1.5f;
+    cam.clipFromView = glm::orthoRH_NO(-0.5f, 0.5f, -0.5f, 0.5f, cam.nearZ, cam.farZ);
+    cam.clipFromWorld = cam.clipFromView * cam.viewFromWorld;
+    return cam;
+}
+
 }  // namespace reliefsim

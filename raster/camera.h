@@ -30,4 +30,9 @@ struct Camera {
 Camera MakeOrbitCamera(float viewAngleDeg, float azimuthDeg, float distance,
                        float fovYDeg, float aspect);
 
+/// Orthographic camera looking straight down (-z) at the plane's square [-0.5, 0.5]^2,
+/// which fills the image exactly (image up = +y): the texture-space view, where pixel
+/// (x, y) of a W x H image sees the plane point of uv ((x + 0.5)/W, (y + 0.5)/H).
+Camera MakeTileOrthoCamera();
+
 }  // namespace reliefsim

@@ -45,6 +45,10 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
     j["map_height"] = field.height;
     j["width"] = s.width;
     j["height"] = s.height;
+    j["camera"] = std::string(kCameraNames.Name(s.camera));
+    if (s.camera == CameraKind::Ortho)
+        j["view_dir"] = {ShortestDouble(s.viewDir.x), ShortestDouble(s.viewDir.y),
+                         ShortestDouble(s.viewDir.z)};
     j["view_angle"] = ShortestDouble(s.viewAngle);
     j["azimuth"] = ShortestDouble(s.azimuth);
     j["distance"] = ShortestDouble(s.distance);
@@ -130,16 +134,16 @@ void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
     const int w = r.width, h = r.height;
     const size_t n = size_t(w) * size_t(h);
     std::vector<uint8_t> mask(n);
-    std::vector<float> iters(n), fetches(n), coarse(n), refine(n), texels(n), flags(n),
-        err(n);
+    std::vector<float> iters(n), fetches(n), err(n);
+    std::vector<uint32_t> coarse(n), refine(n), iterCounts(n), flags(n);
     for (size_t i = 0; i < n; ++i) {
         mask[i] = r.Covered(i) ? 1 : 0;
-        coarse[i] = float(r.nCoarse[i]);
-        refine[i] = float(r.nRefine[i]);
-        iters[i] = float(r.nCoarse[i] + r.nRefine[i]);
+        coarse[i] = r.nCoarse[i];
+        refine[i] = r.nRefine[i];
+        iterCounts[i] = uint32_t(r.nCoarse[i]) + r.nRefine[i];
+        iters[i] = float(iterCounts[i]);
         fetches[i] = float(r.nFetches[i]);
-        texels[i] = float(r.nTexelReads[i]);
-        flags[i] = float(r.flags[i]);
+        flags[i] = r.flags[i];
         err[i] = PaperError(r, i, field, s.sampler);
     }
     WriteColorPng(dest("color.png"), out.color.data(), w, h, &outputs);
@@ -150,23 +154,22 @@ void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
     WriteHeatmapPng(dest("fetches.png"), fetches.data(), mask.data(), w, h,
                     {s.fetchScaleMin, s.fetchScaleMax, "inferno", "fetches, " + s.method},
                     &outputs);
-    std::vector<std::string> names = {"hit_u",
-                                      "hit_v",
-                                      "hit_depth",
-                                      "coarse_iterations",
-                                      "refine_iterations",
-                                      "iterations",
-                                      "fetches",
-                                      "texel_reads",
-                                      "flags",
-                                      "error_paper"};
-    std::vector<const float*> channels = {
-        r.hitU.data(), r.hitV.data(),  r.hitDepth.data(), coarse.data(), refine.data(),
-        iters.data(),  fetches.data(), texels.data(),     flags.data(),  err.data()};
-    std::vector<float> depthError, uvError, missed, missedRgb;
+    // Counts as 32-bit UINT channels, values as FLOAT (issue: exact counts at any size).
+    std::vector<ExrChannel> channels = {{"hit_u", r.hitU.data(), nullptr},
+                                        {"hit_v", r.hitV.data(), nullptr},
+                                        {"hit_depth", r.hitDepth.data(), nullptr},
+                                        {"coarse_iterations", nullptr, coarse.data()},
+                                        {"refine_iterations", nullptr, refine.data()},
+                                        {"iterations", nullptr, iterCounts.data()},
+                                        {"fetches", nullptr, r.nFetches.data()},
+                                        {"texel_reads", nullptr, r.nTexelReads.data()},
+                                        {"flags", nullptr, flags.data()},
+                                        {"error_paper", err.data(), nullptr}};
+    std::vector<float> depthError, uvError, missedRgb;
+    std::vector<uint32_t> missed;
     if (out.hasReference) {
         const ReferenceRecord& ref = out.reference;
-        depthError.assign(n, 0.0f), uvError.assign(n, 0.0f), missed.assign(n, 0.0f);
+        depthError.assign(n, 0.0f), uvError.assign(n, 0.0f), missed.assign(n, 0);
         missedRgb.assign(3 * n, 0.0f);
         for (size_t i = 0; i < n; ++i) {
             if (!mask[i]) continue;
@@ -174,19 +177,20 @@ void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
             uvError[i] = float(UvErrorTexels(double(r.hitU[i]) - double(ref.u[i]),
                                              double(r.hitV[i]) - double(ref.v[i]),
                                              field.width, field.height));
-            missed[i] = float(ref.missed[i]);
+            missed[i] = ref.missed[i];
             // The mask: white where geometry was missed, grey elsewhere on the plane.
             const float shade = ref.missed[i] ? 1.0f : 0.25f;
             for (size_t c = 0; c < 3; ++c) missedRgb[3 * i + c] = shade;
         }
-        names.insert(names.end(), {"ref_u", "ref_v", "ref_depth", "depth_error",
-                                   "uv_error_texels", "missed_geometry"});
-        channels.insert(channels.end(),
-                        {ref.u.data(), ref.v.data(), ref.depth.data(), depthError.data(),
-                         uvError.data(), missed.data()});
+        channels.insert(channels.end(), {{"ref_u", ref.u.data(), nullptr},
+                                         {"ref_v", ref.v.data(), nullptr},
+                                         {"ref_depth", ref.depth.data(), nullptr},
+                                         {"depth_error", depthError.data(), nullptr},
+                                         {"uv_error_texels", uvError.data(), nullptr},
+                                         {"missed_geometry", nullptr, missed.data()}});
         WriteColorPng(dest("missed_geometry.png"), missedRgb.data(), w, h, &outputs);
     }
-    WriteMultiChannelExr(dest("record.exr"), w, h, names, channels, &outputs);
+    WriteMultiChannelExr(dest("record.exr"), w, h, channels, &outputs);
     outputs.Write(dest("metrics.json"), MetricsJson(out, s, field).dump(2) + "\n");
     outputs.Commit();
 }

@@ -44,6 +44,21 @@ void ValidateSettings(const RenderSettings& s) {
     if (!std::isfinite(s.fetchScaleMin) || !std::isfinite(s.fetchScaleMax) ||
         !(s.fetchScaleMax > s.fetchScaleMin))
         bad("--fetches-scale: MIN and MAX must be finite with MAX > MIN");
+    if (s.camera == CameraKind::Ortho) {
+        const glm::vec3 d = s.viewDir;
+        const std::string text = num(d.x) + "," + num(d.y) + "," + num(d.z);
+        if (!(std::isfinite(d.x) && std::isfinite(d.y) && std::isfinite(d.z)))
+            bad("--view-dir " + text + ": must be finite");
+        if (!(d.z < 0.0f))
+            bad("--view-dir " + text +
+                ": Z must be < 0 (the direction from the eye towards the surface)");
+        if (!(std::hypot(double(d.x), double(d.y)) <= 1000.0 * -double(d.z)))
+            bad("--view-dir " + text +
+                ": within 89.94 degrees of the normal (|XY| <= 1000 |Z|)");
+        if (s.tiling != 1.0f)
+            bad("--tiling " + num(s.tiling) +
+                ": the ortho camera frames exactly one tile; leave --tiling at 1");
+    }
     if (s.method == kExactMethod) {
         if (!s.set.empty())
             bad("--set " + s.set.front() + ": method exact takes no parameters");
@@ -79,6 +94,7 @@ Kernel SettingsKernel(const RenderSettings& s) {
 }
 
 Camera SceneCamera(const RenderSettings& s) {
+    if (s.camera == CameraKind::Ortho) return MakeTileOrthoCamera();
     return MakeOrbitCamera(s.viewAngle, s.azimuth, s.distance, s.fovY,
                            float(s.width) / float(s.height));
 }
@@ -99,6 +115,12 @@ ViewUniforms MakeViewUniforms(const RenderSettings& s) {
     u.height = float(s.height);
     u.tiling = s.tiling;
     u.depthScale = s.depthScale;
+    if (s.camera == CameraKind::Ortho) {
+        // DESIGN.md conventions: dirUv = -view_ts.xy / view_ts.z * depth scale, in float.
+        u.ortho = 1;
+        u.orthoDu = -(s.viewDir.x / s.viewDir.z) * s.depthScale;
+        u.orthoDv = -(s.viewDir.y / s.viewDir.z) * s.depthScale;
+    }
     return u;
 }
 

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "core/enum_names.h"
 #include "kernels/registry.h"
 #include "raster/camera.h"
 #include "raster/mesh.h"
@@ -23,6 +24,14 @@ constexpr float kMaxDepthScale = 100.0f;  ///< plane widths
 constexpr float kMaxTiling = 4096.0f;
 constexpr float kMinDistance = 0.01f, kMaxDistance = 1000.0f;  ///< plane widths
 
+/// The scene's camera: the orbit camera (--view-angle, --azimuth, --distance, --fov) or
+/// the orthographic texture-space view of one tile (--view-dir).
+enum class CameraKind { Orbit, Ortho };
+inline constexpr auto kCameraNames = MakeEnumNames<CameraKind>({
+    {"orbit", CameraKind::Orbit},
+    {"ortho", CameraKind::Ortho},
+});
+
 /// Everything `reliefsim render` takes besides the map. Defaults are the documented ones.
 struct RenderSettings {
     std::string method = "relief";
@@ -34,9 +43,13 @@ struct RenderSettings {
     float fovY = 45.0f;       ///< vertical field of view, degrees
     float depthScale = 0.1f;  ///< relief depth in plane units; > 0
     float tiling = 1.0f;      ///< texture repeats across the plane; > 0
-    SamplerState sampler;     ///< height-map filter and wrap
-    int threads = 0;          ///< worker threads; 0 = all cores
-    int lanes = 0;            ///< fragment-driver lane width; 0 = the widest the CPU runs
+    CameraKind camera = CameraKind::Orbit;
+    /// The ortho view's tangent-space direction from the eye towards the surface (Z < 0;
+    /// any length).
+    glm::vec3 viewDir{0.0f, 0.0f, -1.0f};
+    SamplerState sampler;  ///< height-map filter and wrap
+    int threads = 0;       ///< worker threads; 0 = all cores
+    int lanes = 0;         ///< fragment-driver lane width; 0 = the widest the CPU runs
     float iterScaleMin = 0.0f, iterScaleMax = 64.0f;    ///< iterations heatmap scale
     float fetchScaleMin = 0.0f, fetchScaleMax = 64.0f;  ///< fetches heatmap scale
     /// Also compute the exact reference of every covered pixel and the metrics against it

@@ -24,6 +24,11 @@ struct ViewUniforms {
     float width, height;  ///< framebuffer size in pixels
     float tiling;         ///< uv repeats across the plane
     float depthScale;     ///< relief depth in plane units (depth 1 = depthScale)
+    /// The orthographic texture-space view (--camera ortho): every pixel's ray enters at
+    /// uv ((x + 0.5)/W, (y + 0.5)/H) and moves (orthoDu, orthoDv) uv per unit depth; the
+    /// fields above are then unused.
+    int ortho = 0;
+    float orthoDu = 0.0f, orthoDv = 0.0f;
 };
 
 /// The kernel input of the pixels (px, py) of each lane, row 0 at the top, sampled at the
@@ -34,6 +39,14 @@ RS_INLINE LaneRay<L> PixelToRayLanes(const ViewUniforms& u, const typename L::F&
                                      const typename L::F& py) {
     using F = typename L::F;
     const F fx = px + F(0.5f), fy = py + F(0.5f);
+    if (u.ortho) {
+        LaneRay<L> r;
+        r.uEntry = fx / F(u.width);
+        r.vEntry = fy / F(u.height);
+        r.du = F(u.orthoDu);
+        r.dv = F(u.orthoDv);
+        return r;
+    }
     const F ndcX = (fx * F(2.0f)) / F(u.width) - F(1.0f);
     const F ndcY = F(1.0f) - (fy * F(2.0f)) / F(u.height);
     const F dx = (F(u.forward.x) + F(u.right.x) * ndcX) + F(u.up.x) * ndcY;

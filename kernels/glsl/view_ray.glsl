@@ -9,6 +9,8 @@ uniform vec3 uUp;       // camera up * tan(fovY/2), world
 uniform float uWidth, uHeight;  // framebuffer size in pixels
 uniform float uTiling;          // uv repeats across the plane
 uniform float uDepthScale;      // relief depth in plane units
+uniform int uOrtho;             // 1: the orthographic texture-space view
+uniform vec2 uOrthoDirUv;       // its ray's uv per unit depth
 
 struct MarchInput {
     vec2 uvEntry;  // uv where the ray enters the relief (tiling included)
@@ -18,6 +20,14 @@ struct MarchInput {
 MarchInput PixelToRay(int px, int py) {
     precise float fx = float(px) + 0.5;
     precise float fy = float(py) + 0.5;
+    if (uOrtho != 0) {
+        MarchInput o;
+        precise float ou = fx / uWidth;
+        precise float ov = fy / uHeight;
+        o.uvEntry = vec2(ou, ov);
+        o.dirUv = uOrthoDirUv;
+        return o;
+    }
     precise float ndcX = (fx * 2.0) / uWidth - 1.0;
     precise float ndcY = 1.0 - (fy * 2.0) / uHeight;
     precise float dx = (uForward.x + uRight.x * ndcX) + uUp.x * ndcY;

@@ -106,8 +106,11 @@ TEST(Sweep, BadConfigurationsNameTheCulprit) {
         R"({"maps": ["builtin:shapes"], "views": [{"filter": "bicubic"}], "methods": [{"method": "relief"}]})",
         "\"bicubic\" is unknown");
     ExpectConfigError(
-        R"({"maps": ["builtin:shapes"], "views": [{"camera": "ortho"}], "methods": [{"method": "relief"}]})",
-        "only the orbit camera");
+        R"({"maps": ["builtin:shapes"], "views": [{"camera": "ortho", "view_dir": [0, 0, 1]}], "methods": [{"method": "relief"}]})",
+        "Z must be < 0");
+    ExpectConfigError(
+        R"({"maps": ["builtin:shapes"], "views": [{"camera": "fisheye"}], "methods": [{"method": "relief"}]})",
+        "\"fisheye\" is unknown");
     ExpectConfigError(
         R"({"maps": [{"map": "x.png", "map_channel": "Q"}], "methods": [{"method": "relief"}]})",
         "\"Q\" is unknown");

@@ -215,6 +215,30 @@ TEST(GlCompare, SamplerModesParametersAndViewsAreBitIdentical) {
     }
 }
 
+// The orthographic texture-space view: every kernel, float and 8-bit, a slanted and a
+// steep direction, a non-square size.
+TEST(GlCompare, OrthoCameraIsBitIdentical) {
+    for (const KernelInfo* info : Methods())
+        for (TextureFormat format : {TextureFormat::R32F, TextureFormat::R8})
+            for (glm::vec3 dir :
+                 {glm::vec3(0.5f, 0.3f, -0.8f), glm::vec3(-2.0f, 1.0f, -0.3f)}) {
+                SCOPED_TRACE(std::string(info->name) + " " +
+                             std::string(ToString(format)));
+                RenderSettings s;
+                s.method = info->name;
+                s.camera = CameraKind::Ortho;
+                s.viewDir = dir;
+                s.width = 96;
+                s.height = 80;
+                s.sampler.precision =
+                    format == TextureFormat::R8 ? Precision::Llvmpipe8 : Precision::Float;
+                const GlCompareResult r =
+                    RunGlCompare(LoadField("builtin:shapes", format), s, Gl());
+                ExpectIdentical(r);
+                EXPECT_EQ(r.comparison.pixels, 96u * 80u);  // the tile fills the image
+            }
+}
+
 TEST(GlCompare, DetectsASamplerMismatch) {
     // The C++ side filters the 8-bit field in float while llvmpipe uses 8.8 fixed point:
     // the comparison must see it (it is not vacuous).

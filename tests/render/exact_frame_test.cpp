@@ -179,3 +179,45 @@ TEST(ReferencePass, TraceShowsTheFramesReferenceErrors) {
     EXPECT_NE(TraceJson(TracePixel(ridge, s, 40, 30)).find("\"missed_geometry\""),
               std::string::npos);
 }
+
+// --camera ortho: pixel (x, y) of a W x H frame sees uv ((x + 0.5)/W, (y + 0.5)/H), every
+// pixel is covered, and every ray moves -(X, Y)/Z * depth scale uv per unit depth.
+TEST(OrthoCamera, PixelToRayIsTheClosedForm) {
+    RenderSettings s = Settings("relief");
+    s.camera = CameraKind::Ortho;
+    s.viewDir = glm::vec3(0.5f, 0.3f, -0.8f);
+    s.depthScale = 0.2f;
+    const ViewUniforms view = MakeViewUniforms(s);
+    for (auto [x, y] : {std::pair{0, 0}, std::pair{95, 63}, std::pair{17, 40}}) {
+        const MarchInput in = PixelToRay(view, x, y);
+        EXPECT_EQ(in.uvEntry.x, (float(x) + 0.5f) / 96.0f);
+        EXPECT_EQ(in.uvEntry.y, (float(y) + 0.5f) / 64.0f);
+        EXPECT_EQ(in.dirUv.x, -(0.5f / -0.8f) * 0.2f);
+        EXPECT_EQ(in.dirUv.y, -(0.3f / -0.8f) * 0.2f);
+    }
+    const DepthField field = MakeBuiltinMap("builtin:bumps:64");
+    const RenderOutput out = Render(field, s);
+    EXPECT_EQ(out.summary.coveredPixels, 96u * 64u);
+    // A flat field in the ortho view is hit at its depth, at uv entry + depth * dirUv.
+    DepthField flat = field;
+    flat.depth.assign(flat.depth.size(), 0.25f);
+    s.method = "exact";
+    const RenderOutput e = Render(flat, s);
+    const size_t i = e.record.Index(10, 20);
+    EXPECT_EQ(e.record.hitDepth[i], 0.25f);
+    EXPECT_NEAR(e.record.hitU[i], 10.5 / 96 + 0.25 * 0.125, 1e-7);
+}
+
+TEST(OrthoCamera, RefusesBadDirectionsAndTiling) {
+    RenderSettings s = Settings("relief");
+    s.camera = CameraKind::Ortho;
+    s.viewDir = glm::vec3(0.0f, 0.0f, 1.0f);
+    EXPECT_THROW(ValidateSettings(s), Error);
+    s.viewDir = glm::vec3(1.0f, 0.0f, 0.0f);
+    EXPECT_THROW(ValidateSettings(s), Error);
+    s.viewDir = glm::vec3(0.0f, 0.0f, -1.0f);
+    s.tiling = 2.0f;
+    EXPECT_THROW(ValidateSettings(s), Error);
+    s.tiling = 1.0f;
+    EXPECT_NO_THROW(ValidateSettings(s));
+}
