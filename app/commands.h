@@ -33,8 +33,10 @@ void RegisterRenderCommand(CLI::App& root);
 void RegisterSummaryCommand(CLI::App& root);
 void RegisterTraceCommand(CLI::App& root);
 void RegisterMapsCommand(CLI::App& root);
-void RegisterSweepCommand(CLI::App& root);  // app/cmd_sweep.cpp: sweep and merge       //
-                                            // app/cmd_maps.cpp (issue #3)
+void RegisterSweepCommand(CLI::App& root);
+void RegisterSafetyCommand(
+    CLI::App& root);  // app/safety.cpp  // app/cmd_sweep.cpp: sweep and merge       //
+                      // app/cmd_maps.cpp (issue #3)
 void RegisterGlCompareCommand(CLI::App& root);  // app/cmd_glcompare.cpp (issue #4)
 
 }  // namespace reliefsim

@@ -28,6 +28,7 @@ int main(int argc, char** argv) {
     RegisterTraceCommand(app);
     RegisterMapsCommand(app);
     RegisterSweepCommand(app);
+    RegisterSafetyCommand(app);
 #ifdef RS_HAVE_GLCOMPARE_COMMAND
     RegisterGlCompareCommand(app);
 #endif
