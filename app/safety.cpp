@@ -30,9 +30,9 @@ SafetyProfile ComputeSafetyProfile(const DepthField& field, const RenderSettings
             ValidateSettings(s);
             const RenderOutput out = Render(field, s);
             const double covered = double(out.summary.coveredPixels);
-            share.push_back(covered > 0
-                                ? double(out.referenceSummary.missedGeometryPixels) / covered
-                                : 0.0);
+            share.push_back(
+                covered > 0 ? double(out.referenceSummary.missedGeometryPixels) / covered
+                            : 0.0);
             uv.push_back(out.referenceSummary.uvErrorTexelsMean);
         }
         p.missedShare.push_back(share);
@@ -78,7 +78,8 @@ void RegisterSafetyCommand(CLI::App& root) {
     auto* cmd = root.add_subcommand(
         "safety",
         "the safety profile: per method and view angle, the share of pixels whose hit "
-        "misses the exact first hit (render's scene options; --method and --view-angle are "
+        "misses the exact first hit (render's scene options; --method and --view-angle "
+        "are "
         "replaced by --methods and --angles)");
     AddRenderOptions(cmd, a->options, /*withHeatmapScales=*/false);
     cmd->add_option("--methods", a->methods,

@@ -260,6 +260,21 @@ void WriteSummaries(const fs::path& dir, const std::map<int, ojson>& byIndex) {
     out.Commit();
 }
 
+/// The checks of render's --out (app/render_options.h CheckOutputDirectory) for a sweep
+/// folder: not empty, a folder if it exists, parents that are folders, and no folder in
+/// place of a file it writes.
+void CheckSweepFolder(const std::string& option, const std::string& dir) {
+    CheckOutputDirectory(option, dir, {"sweep.json", "results.csv", "tables.md"});
+}
+
+void CreateFolder(const fs::path& path, const std::string& option) {
+    std::error_code ec;
+    fs::create_directories(path, ec);
+    if (ec)
+        throw Error(option + " \"" + path.parent_path().string() +
+                    "\": cannot create its folder (" + ec.message() + ")");
+}
+
 void ProgressBar(int done, int total, const std::string& what) {
     const int width = 30, filled = total > 0 ? done * width / total : width;
     std::fprintf(
@@ -449,10 +464,9 @@ int RunSweep(const std::string& configText, const std::string& subject,
         throw Error("--task-index " + std::to_string(o.taskIndex) + " --task-count " +
                     std::to_string(o.taskCount) + ": need 0 <= index < count");
     const std::vector<SweepConfig> configs = ParseSweepConfig(configText, subject);
+    CheckSweepFolder("--out", outDir);
     const fs::path dir(outDir);
     std::error_code ec;
-    if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
-        throw Error("--out \"" + outDir + "\": exists and is not a directory");
     const std::string canonical = CanonicalConfig(configText);
     const fs::path stored = dir / "sweep.json";
     if (fs::exists(stored, ec) && ReadText(stored, "sweep") != canonical)
@@ -472,7 +486,7 @@ int RunSweep(const std::string& configText, const std::string& subject,
         lo.stores = *ParseStores(c.mapStores);
         fields.emplace(key(c), LoadHeightMap(c.map, lo));
     }
-    fs::create_directories(dir / "rows");
+    CreateFolder(dir / "rows", "--out");
     if (!fs::exists(stored, ec)) WriteFileAtomically(stored.string(), canonical, "sweep");
     const std::map<int, ojson> have = ReadRows(dir);
     std::vector<const SweepConfig*> todo;
@@ -502,6 +516,7 @@ int RunSweep(const std::string& configText, const std::string& subject,
 
 void MergeSweeps(const std::vector<std::string>& partDirs, const std::string& outDir) {
     if (partDirs.empty()) throw Error("merge: give the shard folders to join");
+    CheckSweepFolder("merge --out", outDir);
     std::string canonical;
     std::map<int, ojson> rows;
     for (const std::string& part : partDirs) {
@@ -524,7 +539,7 @@ void MergeSweeps(const std::vector<std::string>& partDirs, const std::string& ou
             throw Error("merge: configuration " + std::to_string(i) + " of " +
                         std::to_string(expected) + " is in none of the shards");
     const fs::path dir(outDir);
-    fs::create_directories(dir / "rows");
+    CreateFolder(dir / "rows", "merge --out");
     WriteFileAtomically((dir / "sweep.json").string(), canonical, "merge");
     for (const auto& [i, r] : rows)
         WriteFileAtomically(RowFile(dir, i), r.dump(1) + "\n", "merge");

@@ -30,7 +30,8 @@ TEST(Safety, ProfileOnARidge) {
     s.azimuth = 90.0f;
     s.threads = 1;
     s.set = {"linear_steps=4"};
-    const SafetyProfile p = ComputeSafetyProfile(Ridge(), s, {"linear", "relief"}, {0, 60});
+    const SafetyProfile p =
+        ComputeSafetyProfile(Ridge(), s, {"linear", "relief"}, {0, 60});
     ASSERT_EQ(p.missedShare.size(), 2u);
     for (size_t m = 0; m < 2; ++m) {
         EXPECT_EQ(p.missedShare[m][0], 0.0) << p.methods[m];

@@ -139,6 +139,13 @@ TEST(Sweep, ResumedRunEqualsAnUninterruptedOne) {
     EXPECT_EQ(std::count(a.begin(), a.end(), '\n'), 21);
     EXPECT_NE(Read(d / "b" / "tables.md").find("| steps | avg steps per pixel | MSE |"),
               std::string::npos);
+    // Folders that cannot hold a sweep: one Error, nothing written.
+    { std::ofstream(d / "file") << "x"; }
+    EXPECT_THROW(RunSweep(kConfig, "cfg", (d / "file" / "sub").string(), {}), Error);
+    EXPECT_THROW(RunSweep(kConfig, "cfg", (d / "file").string(), {}), Error);
+    EXPECT_THROW(RunSweep(kConfig, "cfg", "", {}), Error);
+    EXPECT_THROW(MergeSweeps({(d / "a").string()}, (d / "file").string()), Error);
+    EXPECT_EQ(Read(d / "file"), "x");
     // Another configuration in the same folder is refused.
     EXPECT_THROW(
         RunSweep(R"({"maps": ["builtin:flat:16"], "methods": [{"method": "linear"}]})",
