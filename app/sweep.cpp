@@ -28,6 +28,10 @@ namespace {
 
 // ---- configuration ------------------------------------------------------------------
 
+/// Most configurations one sweep may hold (a config that crosses more is refused before
+/// any work).
+constexpr size_t kMaxConfigurations = 1000000;
+
 /// The render keys a view, or the top level, may set.
 const std::vector<std::string>& RenderKeys() {
     static const std::vector<std::string> kKeys = {
@@ -90,7 +94,8 @@ void ApplyRenderKey(RenderSettings& s, const std::string& key, const ojson& v,
         s.sampler.precision = EnumValue(kTextureFormatNames, v, at);
     else if (key == "threads" || key == "lanes") {
         const double n = Number(v, at);
-        if (n != double(int(n))) Bad(at, "expected an integer, got " + v.dump());
+        if (!(std::abs(n) <= 1e6) || n != double(int(n)))
+            Bad(at, "expected an integer in [-1e6, 1e6], got " + v.dump());
         (key == "threads" ? s.threads : s.lanes) = int(n);
     } else if (key == "camera") {
         s.camera = EnumValue(kCameraNames, v, at);
@@ -112,7 +117,7 @@ bool IsRenderKey(const std::string& key) {
 /// A --set value as text: integers without a decimal point.
 std::string SetValueText(double v) {
     char buf[32];
-    if (v == double(int64_t(v)) && std::abs(v) < 1e15)
+    if (std::abs(v) < 1e15 && v == double(int64_t(v)))
         std::snprintf(buf, sizeof buf, "%lld", static_cast<long long>(v));
     else
         std::snprintf(buf, sizeof buf, "%.17g", v);
@@ -164,6 +169,9 @@ std::vector<std::vector<std::pair<std::string, double>>> CrossSet(
         } else {
             values.push_back(Number(value, at));
         }
+        if (combos.size() * values.size() > kMaxConfigurations)
+            Bad(at, "the crossed lists give more than " +
+                        std::to_string(kMaxConfigurations) + " configurations");
         std::vector<std::vector<std::pair<std::string, double>>> next;
         for (const auto& c : combos)
             for (double x : values) {
@@ -347,6 +355,10 @@ std::vector<SweepConfig> ParseSweepConfig(const std::string& text,
                 const std::string method = Text(m["method"], mat + " \"method\"");
                 for (const auto& combo :
                      CrossSet(m.contains("set") ? m["set"] : ojson(), mat + " \"set\"")) {
+                    if (configs.size() >= kMaxConfigurations)
+                        Bad(subject,
+                            "more than " + std::to_string(kMaxConfigurations) +
+                                " configurations (maps x views x methods x sets)");
                     SweepConfig c;
                     c.index = int(configs.size());
                     c.map = maps[mi].map;
@@ -362,7 +374,7 @@ std::vector<SweepConfig> ParseSweepConfig(const std::string& text,
                     c.columns["method"] = method;
                     for (const auto& [k, x] : combo) {
                         c.settings.set.push_back(k + "=" + SetValueText(x));
-                        if (x == double(int64_t(x)) && std::abs(x) < 1e15)
+                        if (std::abs(x) < 1e15 && x == double(int64_t(x)))
                             c.columns["set." + k] = int64_t(x);
                         else
                             c.columns["set." + k] = x;
@@ -474,6 +486,8 @@ int RunSweep(const std::string& configText, const std::string& subject,
             "--out \"" + outDir +
             "\": holds a sweep of another configuration (its sweep.json differs); "
             "use a new folder");
+    for (const SweepConfig& c : configs)
+        RequireFrameMemory(c.settings.width, c.settings.height);  // one size per sweep
     // Every map is loaded (and so checked) before any row is computed.
     std::map<std::string, DepthField> fields;
     auto key = [](const SweepConfig& c) {
