@@ -119,6 +119,20 @@ TEST(Sweep, BadConfigurationsNameTheCulprit) {
         "--size");
 }
 
+TEST(Sweep, RefusesHugeCrossProductsAndOutOfRangeIntegers) {
+    std::string budgets;  // 10 x 10 x 2 x 5001 crossed values: over the cap
+    for (int b = 1; b <= 5001; ++b) budgets += (b > 1 ? "," : "") + std::to_string(b);
+    ExpectConfigError(
+        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief", )"
+        R"("set": {"linear_steps": [1,2,3,4,5,6,7,8,9,10], "refine_steps": )"
+        R"([0,1,2,3,4,5,6,7,8,9], "early_exit": [0,1], "budget": [)" +
+            budgets + "]}}]}",
+        "more than 1000000 configurations");
+    ExpectConfigError(
+        R"({"threads": 1e20, "maps": ["builtin:shapes"], "methods": [{"method": "relief"}]})",
+        "expected an integer");
+}
+
 TEST(Sweep, ResumedRunEqualsAnUninterruptedOne) {
     const fs::path d = Scratch();
     SweepRunOptions partial;
