@@ -20,7 +20,7 @@ void RunRender(RenderArgs& a) {
     ResolveRenderSettings(a.options);  // before any file is read or written
     const RenderSettings& s = a.options.settings;
     std::vector<std::string> outputs = RenderOutputNames();
-    if (!s.reference) outputs.pop_back();  // missed_geometry.png
+    if (!s.reference) std::erase(outputs, std::string("missed_geometry.png"));
     CheckOutputDirectory("--out", a.out, outputs);
     RequireFrameMemory(s.width, s.height);
     DepthField field = LoadRenderMap(a.options);
@@ -36,7 +36,8 @@ void RunRender(RenderArgs& a) {
                   << "), mse_paper " << m.msePaper << ", " << out.frameSeconds * 1e3
                   << " ms\n"
                   << "wrote " << a.out
-                  << "/{color.png,iterations.png,fetches.png,record.exr,metrics.json"
+                  << "/{color.png,iterations.png,fetches.png,record.exr,metrics.json,"
+                     "warp_trips.png,warp_utilisation.png"
                   << (s.reference ? ",missed_geometry.png" : "") << "}\n";
     }
 }
@@ -48,7 +49,8 @@ void RegisterRenderCommand(CLI::App& root) {
     auto* cmd = root.add_subcommand(
         "render",
         "render the textured plane with one method; write color.png, iterations.png, "
-        "fetches.png, record.exr, metrics.json and missed_geometry.png into --out");
+        "fetches.png, record.exr, metrics.json, warp_trips.png, warp_utilisation.png and "
+        "missed_geometry.png into --out");
     AddRenderOptions(cmd, a->options);
     cmd->add_option("--out", a->out,
                     "output directory (created with its parents; the outputs replaced)")

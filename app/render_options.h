@@ -54,11 +54,12 @@ std::pair<int, int> ParsePixel(const std::string& option, const std::string& tex
 void CheckOutputFile(const std::string& option, const std::string& path,
                      bool folderIsCreated = true);
 
-/// The files `render --out DIR` writes (the last only with the reference, the default).
+/// The files `render --out DIR` writes (missed_geometry.png only with the reference, the
+/// default).
 inline const std::vector<std::string>& RenderOutputNames() {
     static const std::vector<std::string> kNames = {
-        "color.png",  "iterations.png", "fetches.png",
-        "record.exr", "metrics.json",   "missed_geometry.png"};
+        "color.png",    "iterations.png", "fetches.png",          "record.exr",
+        "metrics.json", "warp_trips.png", "warp_utilisation.png", "missed_geometry.png"};
     return kNames;
 }
 

@@ -169,6 +169,7 @@ void SetupTriangleAndBin(const ClipVertex* verts, uint32_t triangle, int width,
     tri.bboxMax = glm::ivec2(int(x1), int(y1));
 
     const uint32_t index = uint32_t(setup.triangles.size());
+    tri.piece = index;
     setup.triangles.push_back(tri);
     const int tilesX = TileCountX(width);
     for (int ty = tri.bboxMin.y / kTileSize; ty <= tri.bboxMax.y / kTileSize; ++ty) {

@@ -41,7 +41,9 @@ struct QuadFragment {
     uint8_t inImageMask;  // bit k: lane k's pixel is inside the image
     bool frontFacing;     // counter-clockwise in GL window space (y up): GL_CCW front
     uint32_t triangle;    // index of the mesh triangle (indices[3*triangle..])
-    glm::vec2 uv[4];      // perspective-correct uv at each lane's pixel centre
+    uint32_t piece;   // the clipped piece of it being drawn: EndTriangleInTile ends one
+                      // piece, so lane groups are per (group, piece)
+    glm::vec2 uv[4];  // perspective-correct uv at each lane's pixel centre
     glm::vec3 worldPos[4];  // perspective-correct world position
     // Perspective-correct tangent frame, not renormalised.
     glm::vec3 tangent[4], bitangent[4], normal[4];
@@ -97,6 +99,7 @@ struct SetupTriangle {
     glm::vec2 uv[3];
     glm::vec3 worldPos[3], tangent[3], bitangent[3], normal[3];
     uint32_t triangle;
+    uint32_t piece;  ///< index among the setup triangles (clipping's pieces), in order
     bool frontFacing;
 };
 
@@ -166,6 +169,7 @@ void RasterizeTriangleInTile(const SetupTriangle& tri, int x0, int y0, int x1, i
                              RasterStats& stats) {
     QuadFragment frag;
     frag.triangle = tri.triangle;
+    frag.piece = tri.piece;
     frag.frontFacing = tri.frontFacing;
     int64_t rowE[3];
     for (int k = 0; k < 3; ++k) rowE[k] = tri.a[k] * x0 + tri.b[k] * y0 + tri.c[k];

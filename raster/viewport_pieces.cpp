@@ -7,19 +7,23 @@ namespace reliefsim {
 
 namespace {
 
+/// Writes, for each covered pixel, the mesh triangle (kPiece = false) or the piece.
+template <class T, bool kPiece>
 class TriangleIdProgram {
   public:
-    TriangleIdProgram(std::vector<int16_t>& ids, int width) : ids_(ids), width_(width) {}
+    static constexpr bool kReadsAttributes = false;
+    TriangleIdProgram(std::vector<T>& ids, int width) : ids_(ids), width_(width) {}
     void ShadeQuad(const QuadFragment& q, int /*tileIndex*/) {
         for (int k = 0; k < 4; ++k) {
             if (!((q.coveredMask >> k) & 1u)) continue;
             const int x = q.pixel0.x + (k & 1), y = q.pixel0.y + (k >> 1);
-            ids_[size_t(y) * size_t(width_) + size_t(x)] = int16_t(q.triangle);
+            ids_[size_t(y) * size_t(width_) + size_t(x)] =
+                T(kPiece ? q.piece : q.triangle);
         }
     }
 
   private:
-    std::vector<int16_t>& ids_;
+    std::vector<T>& ids_;
     int width_;
 };
 
@@ -71,7 +75,15 @@ Mesh ClipMeshToViewport(const Mesh& mesh, const glm::mat4& clipFromWorld) {
 std::vector<int16_t> TrianglePerPixel(const Mesh& mesh, const Camera& camera, int width,
                                       int height) {
     std::vector<int16_t> ids(size_t(width) * size_t(height), int16_t(-1));
-    TriangleIdProgram program(ids, width);
+    TriangleIdProgram<int16_t, false> program(ids, width);
+    RasterizeFrame(mesh, camera, width, height, program);
+    return ids;
+}
+
+std::vector<int32_t> PiecePerPixel(const Mesh& mesh, const Camera& camera, int width,
+                                   int height) {
+    std::vector<int32_t> ids(size_t(width) * size_t(height), -1);
+    TriangleIdProgram<int32_t, true> program(ids, width);
     RasterizeFrame(mesh, camera, width, height, program);
     return ids;
 }

@@ -28,4 +28,10 @@ Mesh ClipMeshToViewport(const Mesh& mesh, const glm::mat4& clipFromWorld);
 std::vector<int16_t> TrianglePerPixel(const Mesh& mesh, const Camera& camera, int width,
                                       int height);
 
+/// The rasterizer's piece (QuadFragment::piece: a triangle after clipping) of each
+/// covered pixel, -1 where none covers it: the split of the lane groups the frame driver
+/// executes.
+std::vector<int32_t> PiecePerPixel(const Mesh& mesh, const Camera& camera, int width,
+                                   int height);
+
 }  // namespace reliefsim

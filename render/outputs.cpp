@@ -10,6 +10,8 @@
 #include "core/error.h"
 #include "core/output_set.h"
 #include "metrics/heatmap.h"
+#include "metrics/lane_groups.h"
+#include "raster/viewport_pieces.h"
 
 namespace reliefsim {
 
@@ -126,8 +128,8 @@ void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
     // destination is checked before anything is written.
     OutputSet outputs("--out \"" + outDir + "\"");
     auto dest = [&](const char* name) { return (dir / name).string(); };
-    for (const char* name :
-         {"color.png", "iterations.png", "fetches.png", "record.exr", "metrics.json"})
+    for (const char* name : {"color.png", "iterations.png", "fetches.png", "record.exr",
+                             "metrics.json", "warp_trips.png", "warp_utilisation.png"})
         outputs.Add(dest(name));
     if (out.hasReference) outputs.Add(dest("missed_geometry.png"));
     const FrameRecord& r = out.record;
@@ -146,6 +148,18 @@ void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
         flags[i] = r.flags[i];
         err[i] = PaperError(r, i, field, s.sampler);
     }
+    // The 32-lane warps (8x4) of the frame, split by triangle as the driver executes
+    // them.
+    const Camera camera = SceneCamera(s);
+    const LaneGroupMap warps =
+        LaneGroups(r, PiecePerPixel(MakePlane(s.tiling), camera, w, h), 8, 4);
+    WriteHeatmapPng(dest("warp_trips.png"), warps.trips.data(), mask.data(), w, h,
+                    {s.fetchScaleMin, s.fetchScaleMax, "inferno",
+                     "trips of the pixel's 8x4 warp, " + s.method},
+                    &outputs);
+    WriteHeatmapPng(dest("warp_utilisation.png"), warps.utilisation.data(), mask.data(),
+                    w, h, {0.0f, 1.0f, "viridis", "lane utilisation of the 8x4 warp"},
+                    &outputs);
     WriteColorPng(dest("color.png"), out.color.data(), w, h, &outputs);
     WriteHeatmapPng(dest("iterations.png"), iters.data(), mask.data(), w, h,
                     {s.iterScaleMin, s.iterScaleMax, "inferno",

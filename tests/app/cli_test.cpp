@@ -61,7 +61,8 @@ TEST(Cli, RenderWritesTheFiveOutputs) {
                d);
     ASSERT_EQ(r.exitCode, 0) << r.err;
     for (const char* name :
-         {"color.png", "iterations.png", "fetches.png", "record.exr", "metrics.json"})
+         {"color.png", "iterations.png", "fetches.png", "record.exr", "metrics.json",
+          "warp_trips.png", "warp_utilisation.png", "missed_geometry.png"})
         EXPECT_TRUE(fs::exists(d / "o" / name)) << name;
 }
 

@@ -152,9 +152,9 @@ TEST(RenderOutputs, RerunReplacesOutputsAndKeepsOtherFiles) {
     EXPECT_EQ(Bytes(out / "notes.txt"), "mine");
     size_t n = 0;
     for (const auto& e : fs::directory_iterator(out)) n += e.is_regular_file() ? 1 : 0;
-    EXPECT_EQ(
-        n,
-        7u);  // six outputs (missed_geometry.png with the reference) and the user's file
+    EXPECT_EQ(n,
+              9u);  // eight outputs (missed_geometry.png with the reference) and the
+                    // user's file
     ExpectNoLeftovers(d);
 }
 

@@ -5,7 +5,9 @@
 
 #include <cmath>
 
+#include "core/error.h"
 #include "metrics/exact.h"
+#include "metrics/lane_groups.h"
 
 using namespace reliefsim;
 
@@ -90,4 +92,28 @@ TEST(ReferenceMetrics, LeavesBetweenSeesTheGapBehindAThinPillar) {
     const ExactSurface fs(flat, WrapMode::Repeat);
     EXPECT_FALSE(fs.LeavesBetween(0.1, 0.2, 2.0, -1.0, 0.3, 1.0, 1e-6));
     EXPECT_TRUE(fs.LeavesBetween(0.1, 0.2, 2.0, -1.0, 0.0, 0.3, 1e-6));
+}
+
+// One 8x4 warp split by two triangles, and a group with no trips.
+TEST(LaneGroupMaps, CostAndUtilisationPerGroupAndTriangle) {
+    FrameRecord r;
+    r.Resize(16, 4);
+    std::vector<int32_t> tri(64, -1);
+    for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 8; ++x) {
+            const size_t i = r.Index(x, y);
+            r.flags[i] = kFlagCovered;
+            tri[i] = x < 4 ? 0 : 1;
+            r.nFetches[i] = x < 4 ? 10 : uint32_t(1 + x);  // triangle 1: 5..8
+        }
+    r.flags[r.Index(8, 0)] = kFlagCovered;  // the second warp: one lane, no trips
+    tri[r.Index(8, 0)] = 1;
+    const LaneGroupMap m = LaneGroups(r, tri, 8, 4);
+    EXPECT_EQ(m.trips[r.Index(0, 0)], 10.0f);
+    EXPECT_EQ(m.trips[r.Index(7, 3)], 8.0f);
+    EXPECT_FLOAT_EQ(m.utilisation[r.Index(1, 2)], 16 * 10 / (32.0f * 10));
+    EXPECT_FLOAT_EQ(m.utilisation[r.Index(5, 0)], 4 * (5 + 6 + 7 + 8) / (32.0f * 8));
+    EXPECT_EQ(m.utilisation[r.Index(8, 0)], 0.0f);
+    EXPECT_EQ(m.totalCost, 32u * 10 + 32u * 8);
+    EXPECT_THROW(LaneGroups(r, std::vector<int32_t>(3), 8, 4), Error);
 }

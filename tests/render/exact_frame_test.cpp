@@ -5,6 +5,8 @@
 #include <cmath>
 
 #include "metrics/exact.h"
+#include "metrics/lane_groups.h"
+#include "raster/viewport_pieces.h"
 #include "render/frame.h"
 #include "render/trace.h"
 #include "texture/procedural.h"
@@ -220,4 +222,20 @@ TEST(OrthoCamera, RefusesBadDirectionsAndTiling) {
     EXPECT_THROW(ValidateSettings(s), Error);
     s.tiling = 1.0f;
     EXPECT_NO_THROW(ValidateSettings(s));
+}
+
+// The warp images' groups are the executed ones: their cost sums to lane_cost_warp32.
+TEST(LaneGroupMaps, TotalEqualsTheExecutedWarpCost) {
+    for (const char* method : {"linear", "relief", "secant"})
+        for (float angle : {0.0f, 45.0f, 80.0f}) {
+            RenderSettings s = Settings(method);
+            s.viewAngle = angle;
+            s.azimuth = 20.0f;
+            const RenderOutput out = Render(MakeBuiltinMap("builtin:noise:64"), s);
+            const Camera camera = SceneCamera(s);
+            const LaneGroupMap m = LaneGroups(
+                out.record, PiecePerPixel(MakePlane(s.tiling), camera, s.width, s.height),
+                8, 4);
+            EXPECT_EQ(m.totalCost, out.laneCost.warp32) << method << " " << angle;
+        }
 }
