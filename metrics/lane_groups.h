@@ -20,8 +20,8 @@ struct LaneGroupMap {
 };
 
 /// Groups of groupWidth x groupHeight pixels aligned to the image (8x4: the 32-lane
-/// warp), split by `piece` (the rasterizer's piece of each pixel, PiecePerPixel). Throws Error for a bad group size or a triangle map of the wrong
-/// size.
+/// warp), split by `piece` (the rasterizer's piece of each pixel, PiecePerPixel). Throws
+/// Error for a bad group size or a triangle map of the wrong size.
 LaneGroupMap LaneGroups(const FrameRecord& record, const std::vector<int32_t>& piece,
                         int groupWidth, int groupHeight);
 
