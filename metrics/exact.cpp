@@ -46,6 +46,31 @@ struct ExactSurface::Cell {
     double d00, d10, d01, d11;
 };
 
+namespace {
+
+/// g(s) = g0 + g1 s + g2 s^2: ray depth minus the bilinear depth of cell `c` (walk cell
+/// (i, j)) along the ray from t0, s = t - t0. With the cell's local coordinates
+/// fx = px + s dx, fy = py + s dy (px, py at t0), D = a + b fx + c fy + e fx fy (a = d00,
+/// b = d10 - d00, c = d01 - d00, e = d00 - d10 - d01 + d11), so g0 = t0 - D(t0),
+/// g1 = 1 - (b dx + c dy + e (px dy + py dx)), g2 = -e dx dy.
+struct CellQuadratic {
+    double g0, g1, g2;
+    double At(double s) const { return g0 + (g1 + g2 * s) * s; }
+};
+
+template <class Ray, class Cell>
+CellQuadratic QuadraticInCell(const Ray& ray, const Cell& c, int64_t i, int64_t j,
+                              double t0) {
+    const double px = ray.X(t0) - double(i), py = ray.Y(t0) - double(j);
+    const double a = c.d00, b = c.d10 - c.d00, cc = c.d01 - c.d00,
+                 e = (c.d00 - c.d10) - (c.d01 - c.d11);
+    return {t0 - (a + b * px + cc * py + e * px * py),
+            1.0 - (b * ray.dx + cc * ray.dy + e * (px * ray.dy + py * ray.dx)),
+            -e * ray.dx * ray.dy};
+}
+
+}  // namespace
+
 ExactSurface::ExactSurface(const DepthField& field, WrapMode wrap)
     : width_(field.width), height_(field.height), wrap_(wrap) {
     ValidateDepthField(field);
@@ -128,26 +153,18 @@ float ExactSurface::BlockMinimum(int level, int64_t bx, int64_t by) const {
     return l.minima[size_t(by * l.width + bx)];
 }
 
-// Cell (i, j) for t in [t0, t1]. With s = t - t0 and the cell's local coordinates
-// fx = px + s dx, fy = py + s dy (px, py at t0), the bilinear depth is
-// D = a + b fx + c fy + e fx fy (a = d00, b = d10 - d00, c = d01 - d00,
-// e = d00 - d10 - d01 + d11), so g(s) = t0 + s - D = g0 + g1 s + g2 s^2 with
-// g0 = t0 - D(t0), g1 = 1 - (b dx + c dy + e (px dy + py dx)), g2 = -e dx dy.
+// Cell (i, j) for t in [t0, t1]: the first root of its quadratic (QuadraticInCell).
 bool ExactSurface::SolveCell(const Ray& ray, int64_t i, int64_t j, double t0, double t1,
                              ExactHit& hit) const {
     const Cell c = CellAt(i - offset_, j - offset_);
     if (t1 < std::min({c.d00, c.d10, c.d01, c.d11})) return false;  // above the cell
     ++hit.cellsTested;
-    const double px = ray.X(t0) - double(i), py = ray.Y(t0) - double(j);
-    const double a = c.d00, b = c.d10 - c.d00, cc = c.d01 - c.d00,
-                 e = (c.d00 - c.d10) - (c.d01 - c.d11);
-    const double g0 = t0 - (a + b * px + cc * py + e * px * py);
+    const CellQuadratic quad = QuadraticInCell(ray, c, i, j, t0);
+    const double g0 = quad.g0, g1 = quad.g1, g2 = quad.g2;
     if (g0 >= 0) {
         hit.t = t0;
         return true;
     }
-    const double g1 = 1.0 - (b * ray.dx + cc * ray.dy + e * (px * ray.dy + py * ray.dx));
-    const double g2 = -e * ray.dx * ray.dy;
     const double len = t1 - t0;
     double s = kInf;
     if (g2 == 0.0) {
@@ -230,29 +247,23 @@ bool ExactSurface::LeavesBetween(double u0, double v0, double du, double dv, dou
                                  double tb, double tolerance) const {
     if (!(tb > ta)) return false;
     const Ray ray = MakeRay(u0, v0, du, dv);
-    return CrossBlocks(
-        ray, 0, ta, tb, FloorIndex(ray.X(ta)), FloorIndex(ray.Y(ta)),
-        [&](int64_t i, int64_t j, double t0, double t1) {
-            // g(s) = g0 + g1 s + g2 s^2 on [0, t1 - t0] (SolveCell's coefficients); its
-            // least value is at an end or, for g2 > 0, at the vertex.
-            const Cell c = CellAt(i - offset_, j - offset_);
-            if (t0 >= std::max({c.d00, c.d10, c.d01, c.d11}) - tolerance) return false;
-            const double px = ray.X(t0) - double(i), py = ray.Y(t0) - double(j);
-            const double b = c.d10 - c.d00, cc = c.d01 - c.d00,
-                         e = (c.d00 - c.d10) - (c.d01 - c.d11);
-            const double g0 = t0 - (c.d00 + b * px + cc * py + e * px * py);
-            const double g1 =
-                1.0 - (b * ray.dx + cc * ray.dy + e * (px * ray.dy + py * ray.dx));
-            const double g2 = -e * ray.dx * ray.dy;
-            const double len = t1 - t0;
-            auto g = [&](double s) { return g0 + (g1 + g2 * s) * s; };
-            double least = std::min(g(0.0), g(len));
-            if (g2 > 0.0) {
-                const double vertex = -g1 / (2.0 * g2);
-                if (vertex > 0.0 && vertex < len) least = std::min(least, g(vertex));
-            }
-            return least < -tolerance;
-        });
+    return CrossBlocks(ray, 0, ta, tb, FloorIndex(ray.X(ta)), FloorIndex(ray.Y(ta)),
+                       [&](int64_t i, int64_t j, double t0, double t1) {
+                           // g on [0, t1 - t0]: its least value is at an end or, for g2 >
+                           // 0, at the vertex.
+                           const Cell c = CellAt(i - offset_, j - offset_);
+                           if (t0 >= std::max({c.d00, c.d10, c.d01, c.d11}) - tolerance)
+                               return false;
+                           const CellQuadratic g = QuadraticInCell(ray, c, i, j, t0);
+                           const double len = t1 - t0;
+                           double least = std::min(g.At(0.0), g.At(len));
+                           if (g.g2 > 0.0) {
+                               const double vertex = -g.g1 / (2.0 * g.g2);
+                               if (vertex > 0.0 && vertex < len)
+                                   least = std::min(least, g.At(vertex));
+                           }
+                           return least < -tolerance;
+                       });
 }
 
 ExactHit ExactSurface::FirstHit(double u0, double v0, double du, double dv) const {

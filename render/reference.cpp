@@ -11,6 +11,15 @@
 
 namespace reliefsim {
 
+bool PixelMissesGeometry(const ExactSurface& surface, const MarchInput& in, float tHit,
+                         float tRef, double step) {
+    if (!(double(tHit) - double(tRef) > step)) return false;
+    return MissedGeometry(
+        tHit, tRef, step,
+        surface.LeavesBetween(in.uvEntry.x, in.uvEntry.y, in.dirUv.x, in.dirUv.y, tRef,
+                              tHit, kReferenceLeaveTolerance));
+}
+
 double CoarseStepDepth(const RenderSettings& s) {
     if (s.method == kExactMethod) return 0.0;
     const Kernel kernel = SettingsKernel(s);
@@ -61,16 +70,10 @@ ReferenceRecord RenderReference(const DepthField& field, const RenderSettings& s
             const size_t i = record.Index(px[k], py[k]);
             ref.u[i] = u[k], ref.v[i] = v[k], ref.depth[i] = depth[k];
             for (size_t c = 0; c < 3; ++c) ref.rgb[3 * i + c] = rgb[3 * k + c];
-            const double tHit = record.hitDepth[i], tRef = depth[k];
-            if (!(tHit - tRef > step)) continue;
-            const MarchInput in = PixelToRay(view, px[k], py[k]);
-            ref.missed[i] =
-                MissedGeometry(tHit, tRef, step,
-                               surface.LeavesBetween(in.uvEntry.x, in.uvEntry.y,
-                                                     in.dirUv.x, in.dirUv.y, tRef, tHit,
-                                                     kReferenceLeaveTolerance))
-                    ? 1
-                    : 0;
+            ref.missed[i] = PixelMissesGeometry(surface, PixelToRay(view, px[k], py[k]),
+                                                record.hitDepth[i], depth[k], step)
+                                ? 1
+                                : 0;
         }
     });
     ref.seconds =

@@ -25,13 +25,7 @@ void TraceReferenceErrors(PixelTrace& trace, const ExactSurface& surface,
     r.uvErrorTexels = UvErrorTexels(double(trace.result.uvHit.x) - double(uRef),
                                     double(trace.result.uvHit.y) - double(vRef),
                                     field.width, field.height);
-    const MarchInput& in = trace.input;
-    r.missedGeometry =
-        double(tHit) - double(tRef) > step &&
-        MissedGeometry(
-            tHit, tRef, step,
-            surface.LeavesBetween(in.uvEntry.x, in.uvEntry.y, in.dirUv.x, in.dirUv.y,
-                                  tRef, tHit, kReferenceLeaveTolerance));
+    r.missedGeometry = PixelMissesGeometry(surface, trace.input, tHit, tRef, step);
 }
 
 }  // namespace

@@ -25,6 +25,16 @@ RenderSettings Settings(const char* method) {
     return s;
 }
 
+/// Depth 1 with a one-texel ridge of depth 0 across it (texel column 32 of 64).
+DepthField Ridge() {
+    DepthField ridge;
+    ridge.width = ridge.height = 64;
+    ridge.name = "ridge";
+    ridge.depth.assign(64 * 64, 1.0f);
+    for (int j = 0; j < 64; ++j) ridge.depth[size_t(j) * 64 + 32] = 0.0f;
+    return ridge;
+}
+
 }  // namespace
 
 // Each covered pixel holds ExactSurface::FirstHit of its ray, rounded to float, and the
@@ -131,11 +141,7 @@ TEST(ReferencePass, EqualsTheExactFrame) {
 // ridge's base is 2 texels wide), and on a flat field the overshoot of 2 steps is never
 // missed geometry.
 TEST(ReferencePass, MissedGeometryOnARidge) {
-    DepthField ridge;
-    ridge.width = ridge.height = 64;
-    ridge.name = "ridge";
-    ridge.depth.assign(64 * 64, 1.0f);
-    for (int j = 0; j < 64; ++j) ridge.depth[size_t(j) * 64 + 32] = 0.0f;
+    const DepthField ridge = Ridge();
     RenderSettings s = Settings("linear");
     s.azimuth = 90.0f;  // rays cross the ridge
     s.set = {"linear_steps=4"};
@@ -153,11 +159,7 @@ TEST(ReferencePass, MissedGeometryOnARidge) {
 
 // trace shows the pixel's errors against the reference as the frame's pass computed them.
 TEST(ReferencePass, TraceShowsTheFramesReferenceErrors) {
-    DepthField ridge;
-    ridge.width = ridge.height = 64;
-    ridge.name = "ridge";
-    ridge.depth.assign(64 * 64, 1.0f);
-    for (int j = 0; j < 64; ++j) ridge.depth[size_t(j) * 64 + 32] = 0.0f;
+    const DepthField ridge = Ridge();
     RenderSettings s = Settings("linear");
     s.azimuth = 90.0f;
     s.set = {"linear_steps=4"};
