@@ -60,6 +60,10 @@ void PrintTrace(const GlCompareArgs& a, const DepthField& field, int x, int y) {
     GlReference gl(s.threads > 0 ? s.threads : -1);
     GlScene scene = MakeGlScene(s);
     scene.measureLanes = false;
+    // The cone channel exactly as the C++ frame bound it.
+    const Textures textures = BindKernelTextures(field, s.sampler, scene.kernel, s.maps);
+    scene.cone = textures.cone;
+    scene.coneSquared = textures.coneSquared;
     scene.traceX = x;
     scene.traceY = y;
     GlFrame g = gl.Render(field, scene);
@@ -226,6 +230,10 @@ GlCompareResult RunGlCompare(const DepthField& field, const RenderSettings& s,
     // it.
     GlScene scene = MakeGlScene(s);
     scene.measureLanes = false;
+    // The cone channel exactly as the C++ frame bound it.
+    const Textures textures = BindKernelTextures(field, s.sampler, scene.kernel, s.maps);
+    scene.cone = textures.cone;
+    scene.coneSquared = textures.coneSquared;
     r.gl = gl.Render(field, scene);
     r.renderer = gl.Renderer();
     r.comparison = CompareRecords(r.cpu.record, r.gl.record);
@@ -243,8 +251,7 @@ GlCompareResult RunGlCompare(const DepthField& field, const RenderSettings& s,
         std::vector<uint32_t> fetches(triangles.size(), 0);
         const ViewUniforms uniforms = MakeViewUniforms(s);
         std::shared_ptr<const void> params;
-        const BatchJob job =
-            MakeBatchJob(scene.kernel, BindTextures(field, s.sampler), params);
+        const BatchJob job = MakeBatchJob(scene.kernel, textures, params);
         detail::DenormalsAreZeroScope fp;  // as in the frame loop
         for (int y = 0; y < s.height; ++y)
             for (int x = 0; x < s.width; ++x) {

@@ -72,7 +72,7 @@ void RegisterSummaryCommand(CLI::App& root) {
                         "; expected a count (an integer >= 0)");
         if (avgIter < 0 || avgFetch < 0 || mse < 0)
             throw Error(subject + ": averages and mse_paper must be >= 0");
-        std::printf("%-10s %10.3f %10.3f %10.0f %12.4e\n",
+        std::printf("%-13s %10.3f %10.3f %10.0f %12.4e\n",
                     j.at("method").get<std::string>().c_str(), avgIter, avgFetch,
                     maxFetch, mse);
     });

@@ -99,6 +99,16 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
            "(AVX2), 16 (AVX-512); results are identical for every width")
         ->capture_default_str()
         ->check(CLI::IsMember({0, 1, 4, 8, 16}));
+    cmd->add_option("--cone-encoding", o.coneEncoding,
+                    "cone kernels: how the cone map is stored, " + ConeEncodingList() +
+                        " (default: as the kernel's paper stores it; csm u8sqrt, rcs u8)")
+        ->type_name("ENC");
+    cmd->add_option("--cache-dir", o.settings.maps.cacheDir,
+                    "disk cache of the cone kernels' generated maps (default "
+                    "$XDG_CACHE_HOME/reliefsim or ~/.cache/reliefsim)")
+        ->type_name("DIR");
+    cmd->add_flag("!--no-cache", o.settings.maps.useCache,
+                  "cone kernels: generate their maps without the disk cache");
     if (!withHeatmapScales) return;
     cmd->add_flag("--reference,!--no-reference", o.settings.reference,
                   "also compute the exact reference of every pixel and the metrics "
@@ -140,6 +150,20 @@ void ResolveRenderSettings(RenderOptions& o) {
             throw Error("--view-dir \"" + o.viewDir +
                         "\": expected X,Y,Z, three numbers");
         s.viewDir = glm::vec3(c[0], c[1], c[2]);
+    }
+    if (!o.coneEncoding.empty()) {
+        const auto e = ParseConeEncoding(o.coneEncoding);
+        if (!e)
+            throw Error("--cone-encoding \"" + o.coneEncoding +
+                        "\": unknown; must be one of: " + ConeEncodingList());
+        s.maps.encoding = *e;
+    }
+    if (!s.maps.cacheDir.empty()) {
+        std::error_code ec;
+        const auto st = std::filesystem::status(s.maps.cacheDir, ec);
+        if (std::filesystem::exists(st) && !std::filesystem::is_directory(st))
+            throw Error("--cache-dir \"" + s.maps.cacheDir +
+                        "\": exists and is not a directory");
     }
     ValidateSettings(s);
 }

@@ -28,6 +28,7 @@ struct RenderOptions {
     std::string iterScale, fetchScale;  ///< MIN:MAX; empty: the settings' scale
     std::string viewDir;                ///< X,Y,Z (--view-dir); empty: the settings'
     const CLI::Option* viewDirOption = nullptr;
+    std::string coneEncoding;  ///< --cone-encoding; empty: the kernel's own
 };
 
 /// Adds render's scene options (map, method, set, size, camera, sampler, texture format,

@@ -12,6 +12,7 @@
 
 #include "bench/raw_chain.h"
 #include "render/batch.h"
+#include "render/kernel_maps.h"
 #include "texture/procedural.h"
 #include "texture/sampler.h"
 
@@ -59,8 +60,11 @@ void BM_Kernel(benchmark::State& state, const KernelInfo* info, LaneWidthInfo wi
         return;
     }
     std::shared_ptr<const void> params;
-    const BatchJob job = MakeBatchJob(MakeKernel(*info, ResolveParams(*info, {})),
-                                      BindTextures(Field(), {}), params);
+    const Kernel kernel = MakeKernel(*info, ResolveParams(*info, {}));
+    KernelMapSettings maps;  // cone kernels: their map, made once (not timed)
+    maps.useCache = false;
+    const BatchJob job =
+        MakeBatchJob(kernel, BindKernelTextures(Field(), {}, kernel, maps), params);
     Rays rays;
     LaneBatch b = rays.Batch();
     uint64_t fetches = 0;

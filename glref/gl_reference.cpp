@@ -233,6 +233,17 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
         throw Error(
             "--filter min4 with --texture-format r8: not compared (llvmpipe's 8-bit "
             "AoS path with a min reduction is not modelled); use r32f");
+    if (!scene.kernel.Info().maps.empty()) {
+        if (!scene.cone || scene.cone->width != field.width ||
+            scene.cone->height != field.height)
+            throw Error("GL reference: kernel " + std::string(scene.kernel.Info().name) +
+                        " reads a cone map and the scene has none of the field's size");
+        if (scene.format == TextureFormat::R8 &&
+            scene.cone->depth8.size() != size_t(field.width) * size_t(field.height))
+            throw Error(
+                "GL reference: an R8 height texture needs the cone map's 8-bit "
+                "codes (--cone-encoding u8 or u8sqrt)");
+    }
     if (scene.kernel.Info().glslFile.empty())
         throw Error("GL reference: kernel " + std::string(scene.kernel.Info().name) +
                     " has no GLSL twin yet");
@@ -259,6 +270,8 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     if (m.tracing)
         fs +=
             "// ---- trace_probe.glsl\n" + std::string(EmbeddedGlsl("trace_probe.glsl"));
+    fs +=
+        "// ---- kernel_common.glsl\n" + std::string(EmbeddedGlsl("kernel_common.glsl"));
     fs += "// ---- " + std::string(scene.kernel.Info().glslFile) + "\n" +
           std::string(EmbeddedGlsl(scene.kernel.Info().glslFile));
     fs += "// ---- record_main.glsl\n" + std::string(EmbeddedGlsl("record_main.glsl"));
@@ -316,7 +329,26 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D, m.texture);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    if (scene.format == TextureFormat::R8) {
+    if (scene.cone) {
+        // The cone kernels' combined texture: depth in R, the stored ratio in G.
+        const DepthField& c = *scene.cone;
+        const size_t n = size_t(field.width) * size_t(field.height);
+        if (scene.format == TextureFormat::R8) {
+            std::vector<uint8_t> rg(2 * n);
+            for (size_t i = 0; i < n; ++i)
+                rg[2 * i] = field.depth8[i], rg[2 * i + 1] = c.depth8[i];
+            glTexStorage2D(GL_TEXTURE_2D, 1, GL_RG8, field.width, field.height);
+            glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, field.width, field.height, GL_RG,
+                            GL_UNSIGNED_BYTE, rg.data());
+        } else {
+            std::vector<float> rg(2 * n);
+            for (size_t i = 0; i < n; ++i)
+                rg[2 * i] = field.depth[i], rg[2 * i + 1] = c.depth[i];
+            glTexStorage2D(GL_TEXTURE_2D, 1, GL_RG32F, field.width, field.height);
+            glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, field.width, field.height, GL_RG,
+                            GL_FLOAT, rg.data());
+        }
+    } else if (scene.format == TextureFormat::R8) {
         glTexStorage2D(GL_TEXTURE_2D, 1, GL_R8, field.width, field.height);
         glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, field.width, field.height, GL_RED,
                         GL_UNSIGNED_BYTE, field.depth8.data());
@@ -372,7 +404,9 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     glUniform1f(loc("uDepthScale"), u.depthScale);
     glUniform1i(loc("uOrtho"), u.ortho);
     glUniform2f(loc("uOrthoDirUv"), u.orthoDu, u.orthoDv);
+    glUniform1f(loc("uOrthoViewZ"), u.orthoViewZ);
     glUniform1i(loc("uHeights"), 0);
+    glUniform1i(loc("uConeSquared"), scene.coneSquared ? 1 : 0);
     UploadKernelUniforms(m.program, scene.kernel);
 
     m.lanesTemplate = LaneMeasurement{};

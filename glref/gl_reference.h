@@ -39,7 +39,12 @@ struct GlScene {
     Mesh mesh;             ///< only positions and indices are used
     SamplerState sampler;  ///< filter and wrap (precision follows from `format`)
     TextureFormat format = TextureFormat::R32F;
-    Kernel kernel;             ///< the configured kernel whose twin runs
+    Kernel kernel;  ///< the configured kernel whose twin runs
+    /// The cone kernels' ratio channel (Textures::cone), uploaded with the depth as one
+    /// RG texture (RG32F, or RG8 of the codes for R8); required when the kernel reads
+    /// a map.
+    std::shared_ptr<const DepthField> cone;
+    bool coneSquared = false;
     bool measureLanes = true;  ///< count executed loop trips per lane group (slower)
     int traceX = -1,
         traceY = -1;  ///< pixel (row 0 at the top) whose fetches are traced; -1: none

@@ -10,7 +10,7 @@
 //   template <class L> static void Begin(const Params&, const LaneRay<L>&, State<L>&,
 //                                        Fetch<L>& first);
 //   template <class L> static typename L::M Step(const Params&, const LaneRay<L>&,
-//                                        State<L>&, typename L::F sampled,
+//                                        State<L>&, const Sample<L>& sampled,
 //                                        typename L::M active, Fetch<L>& next);
 //   template <class L> static void End(const Params&, const LaneRay<L>&, const State<L>&,
 //                                      LaneOutcome<L>&);
@@ -20,7 +20,9 @@
 // the lanes that want another fetch (naming it in `next`). Before every fetch the driver
 // applies the fetch budget; a lane refused a fetch stops with its state as it is, so End
 // must answer from State what the lane returns if it stopped there. The GLSL twin is the
-// same step in a do-while loop (kernels/glsl/).
+// same step in a do-while loop (kernels/glsl/). A kernel with `static constexpr bool
+// kReadsRatio = true` reads a cone-family map: each of its fetches returns the depth and
+// the decoded cone ratio at the same uv (one fetch of the combined texture).
 #pragma once
 
 #include <cstdint>
@@ -41,6 +43,10 @@ struct MarchInput {
     glm::vec2 uvEntry;  ///< uv where the ray enters the relief (tiling included)
     glm::vec2 dirUv;    ///< uv travelled per unit depth: -view.xy / view.z * depthScale *
                         ///< tiling
+    /// |view.z| of the unit tangent-space view direction (the cosine of the view angle
+    /// to the normal): what offset limiting (Welsh 2004) scales by. A ray built by hand
+    /// without it looks straight down (1).
+    float viewZ = 1.0f;
 };
 
 /// What a kernel returns for one fragment. Iterations are loop trips of the paper's
@@ -82,6 +88,9 @@ struct KernelInfo {
     std::span<const std::string_view> maps;  ///< derived maps it needs besides the height
     std::string_view glslFile;               ///< its twin in kernels/glsl/
     std::span<const GlslConstant> glslConstants;
+    /// How its maps are stored by default (a kConeEncodingNames name: as its paper
+    /// stores them); "" when it reads none.
+    std::string_view mapEncoding = "";
 };
 
 /// Parameter values by name: every parameter of the method, defaults filled in.
@@ -105,8 +114,22 @@ struct LaneRay {
     using F = typename L::F;
     F uEntry, vEntry;  ///< MarchInput::uvEntry
     F du, dv;          ///< MarchInput::dirUv
+    F viewZ;           ///< MarchInput::viewZ
     F U(const F& t) const { return uEntry + du * t; }
     F V(const F& t) const { return vEntry + dv * t; }
+};
+
+/// What one fetch returns per lane: the depth, and the decoded cone ratio for kernels
+/// that read one (kReadsRatio; unspecified otherwise).
+template <class L>
+struct Sample {
+    typename L::F h, ratio;
+};
+
+/// Whether kernel K reads a cone map with its depths.
+template <class K>
+concept KernelReadsRatio = requires {
+    requires K::kReadsRatio;
 };
 
 /// Where each lane fetches next: uv, and the ray depth there (for traces).

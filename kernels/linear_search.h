@@ -126,9 +126,14 @@ struct LinearSearch {
         GlslConstant{"uRefinement", int(R)}};
 
     static const KernelInfo& Info() {
-        static const KernelInfo info{
-            Preset::kName,        Preset::kTitle, Preset::kSource, Preset::kParams, {},
-            "linear_search.glsl", kGlslConstants};
+        static const KernelInfo info{Preset::kName,
+                                     Preset::kTitle,
+                                     Preset::kSource,
+                                     Preset::kParams,
+                                     {},
+                                     "linear_search.glsl",
+                                     kGlslConstants,
+                                     ""};
         return info;
     }
 
@@ -198,9 +203,10 @@ struct LinearSearch {
 
     template <class L>
     RS_INLINE static typename L::M Step(const Params& p, const LaneRay<L>& ray,
-                                        State<L>& s, const typename L::F& h,
+                                        State<L>& s, const Sample<L>& x,
                                         const typename L::M& active, Fetch<L>& next) {
         using F = typename L::F;
+        const F& h = x.h;
         using M = typename L::M;
         const F one(1.0f);
         const F stepSize = one / F(float(p.linearSteps));

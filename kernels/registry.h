@@ -12,8 +12,10 @@
 #include <utility>
 #include <vector>
 
+#include "kernels/cone_step.h"
 #include "kernels/kernel.h"
 #include "kernels/linear_search.h"
+#include "kernels/parallax.h"
 
 namespace reliefsim {
 
@@ -24,7 +26,8 @@ struct KernelList {
 
 /// Every kernel, in catalogue order (the order of `reliefsim methods`).
 using KernelTypes =
-    KernelList<LinearKernel, ReliefKernel, SecantKernel, IntervalKernel, PomKernel>;
+    KernelList<ParallaxKernel, OffsetLimitKernel, LinearKernel, ReliefKernel,
+               SecantKernel, IntervalKernel, PomKernel, CsmKernel, RcsKernel>;
 
 using MethodInfo = KernelInfo;
 using ParamDef = ParamSpec;

@@ -98,6 +98,7 @@ RayRun RunOneRay(const MarchInput& in, Run&& run) {
     b.n = 1;
     b.uEntry = &in.uvEntry.x, b.vEntry = &in.uvEntry.y;
     b.du = &in.dirUv.x, b.dv = &in.dirUv.y;
+    b.viewZ = &in.viewZ;
     b.u = &u, b.v = &v, b.depth = &depth;
     b.nCoarse = &out.result.nCoarse, b.nRefine = &out.result.nRefine;
     b.fetches = &out.counts.nFetches, b.texelReads = &out.counts.nTexelReads;
@@ -140,7 +141,13 @@ BatchJob MakeBatchJob(const Kernel& kernel, const Textures& textures,
     job.budget = kernel.Budget();
     job.textures = textures;
     if (!job.textures.padded)
-        job.textures = BindTextures(*textures.depth, textures.sampler);
+        job.textures.padded = BindTextures(*textures.depth, textures.sampler).padded;
+    if (!kernel.Info().maps.empty() && !job.textures.cone)
+        throw Error("--method " + std::string(kernel.Info().name) +
+                    ": reads a cone map and none is bound (render/kernel_maps.h "
+                    "BindKernelTextures makes it)");
+    if (job.textures.cone && !job.textures.conePadded)
+        BindConeChannel(job.textures, *job.textures.cone, job.textures.coneSquared);
     return job;
 }
 

@@ -26,7 +26,8 @@ struct LaneBatch {
     int n = 0;
     const float *uEntry = nullptr, *vEntry = nullptr;  ///< MarchInput::uvEntry
     const float *du = nullptr, *dv = nullptr;          ///< MarchInput::dirUv
-    const int32_t *px = nullptr, *py = nullptr;        ///< or pixels (row 0 at the top)
+    const float* viewZ = nullptr;  ///< MarchInput::viewZ; null: 1 for every ray
+    const int32_t *px = nullptr, *py = nullptr;  ///< or pixels (row 0 at the top)
     float* rgb = nullptr;  ///< when set, 3 floats per lane: the shaded hit (ShadeHit)
     float *u = nullptr, *v = nullptr, *depth = nullptr;  ///< returned point
     uint16_t *nCoarse = nullptr, *nRefine = nullptr;

@@ -19,9 +19,10 @@ void RunExactBatch(const BatchJob& job, LaneBatch& b) {
     const ExactSurface& surface = *static_cast<const ExactSurface*>(job.params);
     const LaneTextures tex = BindLanes(job.textures);
     for (int i = 0; i < b.n; ++i) {
-        const MarchInput in =
-            b.px ? PixelToRay(*job.view, b.px[i], b.py[i])
-                 : MarchInput{{b.uEntry[i], b.vEntry[i]}, {b.du[i], b.dv[i]}};
+        const MarchInput in = b.px ? PixelToRay(*job.view, b.px[i], b.py[i])
+                                   : MarchInput{{b.uEntry[i], b.vEntry[i]},
+                                                {b.du[i], b.dv[i]},
+                                                b.viewZ ? b.viewZ[i] : 1.0f};
         const ExactHit hit =
             surface.FirstHit(in.uvEntry.x, in.uvEntry.y, in.dirUv.x, in.dirUv.y);
         b.u[i] = float(hit.u);

@@ -204,7 +204,8 @@ RenderOutput Render(const DepthField& field, const RenderSettings& s) {
     } else {
         const Kernel kernel = SettingsKernel(s);
         out.params = kernel.values;
-        job = MakeBatchJob(kernel, BindTextures(field, s.sampler), params);
+        job = MakeBatchJob(kernel, BindKernelTextures(field, s.sampler, kernel, s.maps),
+                           params);
     }
 
     std::unique_ptr<tbb::global_control> limit;

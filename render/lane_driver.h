@@ -62,7 +62,7 @@ template <class K, class L>
 struct PackRun {
     using F = typename L::F;
     using M = typename L::M;
-    LaneRay<L> ray{F(0.0f), F(0.0f), F(0.0f), F(0.0f)};
+    LaneRay<L> ray{F(0.0f), F(0.0f), F(0.0f), F(0.0f), F(1.0f)};
     typename K::template State<L> state;
     Fetch<L> fetch;
     F fetches{0.0f}, texels{0.0f};
@@ -99,6 +99,10 @@ RS_INLINE void BeginPack(const typename K::Params& params, const BatchJob& job,
         p.ray.vEntry.copy_from(b.vEntry + base, stdx::element_aligned);
         p.ray.du.copy_from(b.du + base, stdx::element_aligned);
         p.ray.dv.copy_from(b.dv + base, stdx::element_aligned);
+        if (b.viewZ)
+            p.ray.viewZ.copy_from(b.viewZ + base, stdx::element_aligned);
+        else
+            p.ray.viewZ = F(1.0f);
     } else {
         for (int k = 0; k < N; ++k) {
             const int i = base + k < b.n ? base + k : b.n - 1;
@@ -106,6 +110,7 @@ RS_INLINE void BeginPack(const typename K::Params& params, const BatchJob& job,
             p.ray.vEntry[k] = b.vEntry[i];
             p.ray.du[k] = b.du[i];
             p.ray.dv[k] = b.dv[i];
+            p.ray.viewZ[k] = b.viewZ ? b.viewZ[i] : 1.0f;
             p.valid[k] = base + k < b.n;
         }
     }
@@ -120,9 +125,14 @@ RS_INLINE void TripPack(const typename K::Params& params, const BatchJob& job,
                         const LaneTextures& tex, PackRun<K, L>& p, OnFetch&& onFetch) {
     using F = typename L::F;
     using M = typename L::M;
-    const F sampled = SampleHeightLanes<L>(tex, p.fetch.u, p.fetch.v, p.active, p.texels);
+    Sample<L> sampled;
+    if constexpr (KernelReadsRatio<K>)
+        sampled.h = SampleHeightConeLanes<L>(tex, p.fetch.u, p.fetch.v, p.active,
+                                             p.texels, sampled.ratio);
+    else
+        sampled.h = SampleHeightLanes<L>(tex, p.fetch.u, p.fetch.v, p.active, p.texels);
     Assign(p.active, p.fetches, p.fetches + F(1.0f));
-    onFetch(p.active, p.fetch, sampled);
+    onFetch(p.active, p.fetch, sampled.h);
     M want = K::template Step<L>(params, p.ray, p.state, sampled, p.active, p.fetch);
     if (job.budget != 0) {
         const M refused = want && (p.fetches >= F(float(job.budget)));

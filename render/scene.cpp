@@ -66,8 +66,13 @@ void ValidateSettings(const RenderSettings& s) {
             bad("--filter " + std::string(kFilterNames.Name(s.sampler.filter)) +
                 ": method exact intersects the bilinear surface; use --filter bilinear");
     } else {
-        ResolveParams(FindMethod(s.method), s.set);
+        const KernelInfo& info = FindMethod(s.method);
+        const Kernel kernel = MakeKernel(info, ResolveParams(info, s.set));
+        ValidateKernelMaps(kernel, s.sampler, s.maps);
     }
+    if (s.maps.encoding &&
+        (s.method == kExactMethod || FindMethod(s.method).maps.empty()))
+        bad("--cone-encoding: method " + s.method + " reads no cone map");
     PickLaneWidth(s.lanes);
 }
 
@@ -120,6 +125,8 @@ ViewUniforms MakeViewUniforms(const RenderSettings& s) {
         u.ortho = 1;
         u.orthoDu = -(s.viewDir.x / s.viewDir.z) * s.depthScale;
         u.orthoDv = -(s.viewDir.y / s.viewDir.z) * s.depthScale;
+        const glm::vec3 d = s.viewDir;
+        u.orthoViewZ = -d.z / std::sqrt((d.x * d.x + d.y * d.y) + d.z * d.z);
     }
     return u;
 }

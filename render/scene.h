@@ -10,6 +10,7 @@
 #include "kernels/registry.h"
 #include "raster/camera.h"
 #include "raster/mesh.h"
+#include "render/kernel_maps.h"
 #include "render/view_ray.h"
 #include "texture/sampler.h"
 
@@ -47,9 +48,10 @@ struct RenderSettings {
     /// The ortho view's tangent-space direction from the eye towards the surface (Z < 0;
     /// any length).
     glm::vec3 viewDir{0.0f, 0.0f, -1.0f};
-    SamplerState sampler;  ///< height-map filter and wrap
-    int threads = 0;       ///< worker threads; 0 = all cores
-    int lanes = 0;         ///< fragment-driver lane width; 0 = the widest the CPU runs
+    SamplerState sampler;    ///< height-map filter and wrap
+    KernelMapSettings maps;  ///< the kernel's derived maps (cone kernels)
+    int threads = 0;         ///< worker threads; 0 = all cores
+    int lanes = 0;           ///< fragment-driver lane width; 0 = the widest the CPU runs
     float iterScaleMin = 0.0f, iterScaleMax = 64.0f;    ///< iterations heatmap scale
     float fetchScaleMin = 0.0f, fetchScaleMax = 64.0f;  ///< fetches heatmap scale
     /// Also compute the exact reference of every covered pixel and the metrics against it

@@ -57,7 +57,8 @@ PixelTrace TracePixel(const DepthField& field, const RenderSettings& s, int x, i
     }
     const Kernel kernel = SettingsKernel(s);
     std::shared_ptr<const void> params;
-    const BatchJob job = MakeBatchJob(kernel, BindTextures(field, s.sampler), params);
+    const BatchJob job = MakeBatchJob(
+        kernel, BindKernelTextures(field, s.sampler, kernel, s.maps), params);
     const RayRun run = MarchRay(job, trace.input, [&](const TracedFetch& f) {
         trace.fetches.push_back({glm::vec2(f.u, f.v), f.t, f.sampled});
     });

@@ -29,11 +29,12 @@ struct ViewUniforms {
     /// fields above are then unused.
     int ortho = 0;
     float orthoDu = 0.0f, orthoDv = 0.0f;
+    float orthoViewZ = 1.0f;  ///< |view.z| of the unit view direction
 };
 
 /// The kernel input of the pixels (px, py) of each lane, row 0 at the top, sampled at the
 /// pixel centre. Rays that graze the plane are bounded (|view.z| >= 1e-6) so they never
-/// produce Inf or NaN.
+/// produce Inf or NaN. viewZ = -dz / |d| of the clamped direction d.
 template <class L>
 RS_INLINE LaneRay<L> PixelToRayLanes(const ViewUniforms& u, const typename L::F& px,
                                      const typename L::F& py) {
@@ -45,6 +46,7 @@ RS_INLINE LaneRay<L> PixelToRayLanes(const ViewUniforms& u, const typename L::F&
         r.vEntry = fy / F(u.height);
         r.du = F(u.orthoDu);
         r.dv = F(u.orthoDv);
+        r.viewZ = F(u.orthoViewZ);
         return r;
     }
     const F ndcX = (fx * F(2.0f)) / F(u.width) - F(1.0f);
@@ -63,6 +65,7 @@ RS_INLINE LaneRay<L> PixelToRayLanes(const ViewUniforms& u, const typename L::F&
     // Tangent frame: T = +x (u), B = -y (v), N = +z; view_ts = (dx, -dy, dz).
     r.du = -(dx / dz) * k;
     r.dv = (dy / dz) * k;
+    r.viewZ = -dz / stdx::sqrt((dx * dx + dy * dy) + dz * dz);
     return r;
 }
 
@@ -73,6 +76,7 @@ inline MarchInput PixelToRay(const ViewUniforms& u, int px, int py) {
     MarchInput in;
     in.uvEntry = glm::vec2(float(r.uEntry[0]), float(r.vEntry[0]));
     in.dirUv = glm::vec2(float(r.du[0]), float(r.dv[0]));
+    in.viewZ = float(r.viewZ[0]);
     return in;
 }
 

@@ -28,12 +28,25 @@ struct Textures {
     const DepthField* depth = nullptr;
     SamplerState sampler;
     std::shared_ptr<const PaddedTexels> padded;  ///< null: the scalar sampler per lane
+    /// The cone kernels' ratio channel (kernels/kernel.h kReadsRatio), texel for texel
+    /// with `depth`: the stored ratio as the texture holds it (float, or code / 255 with
+    /// the codes in depth8 for 8-bit maps), sampled with the same footprint and weights
+    /// as the depth in the same fetch. Null for kernels that read no cone map.
+    std::shared_ptr<const DepthField> cone;
+    std::shared_ptr<const PaddedTexels> conePadded;
+    bool coneSquared = false;  ///< the ratio is stored as sqrt(r): square after sampling
 };
+
+/// Adds the ratio channel `cone` (same size as the depth) to `t`, padded for its wrap.
+void BindConeChannel(Textures& t, DepthField cone, bool squared);
 
 /// Textures for `field` sampled with `state`, with the padded texels the lanes read.
 inline Textures BindTextures(const DepthField& field, SamplerState state) {
-    return {&field, state,
-            std::make_shared<const PaddedTexels>(PadTexels(field, state.wrap))};
+    Textures t;
+    t.depth = &field;
+    t.sampler = state;
+    t.padded = std::make_shared<const PaddedTexels>(PadTexels(field, state.wrap));
+    return t;
 }
 
 /// Textures resolved for the lanes: what a fetch reads, as plain values. The driver
@@ -49,6 +62,10 @@ struct LaneTextures {
     int width = 0, height = 0;  ///< of the field
     int stride = 0;             ///< of the padded texels
     bool pow2W = false, pow2H = false;
+    const DepthField* coneField = nullptr;  ///< the ratio channel (Textures::cone)
+    const float* conePadded = nullptr;      ///< its padded texels (layout of `padded`)
+    const uint8_t* cone8 = nullptr;         ///< its 8-bit codes (with depth8)
+    bool coneSquared = false;
 };
 
 inline LaneTextures BindLanes(const Textures& t) {
@@ -70,6 +87,19 @@ inline LaneTextures BindLanes(const Textures& t) {
         b.padded = t.padded->texels.data();
         b.paddedCount = t.padded->Count();
         b.stride = t.padded->stride;
+    }
+    if (t.cone) {
+        RS_CHECK(t.cone->width == b.width && t.cone->height == b.height);
+        b.coneField = t.cone.get();
+        b.coneSquared = t.coneSquared;
+        if (b.depth8) {
+            RS_CHECK(t.cone->depth8.size() == t.depth->depth8.size());
+            b.cone8 = t.cone->depth8.data();
+        } else if (b.padded) {
+            RS_CHECK(t.conePadded && t.conePadded->stride == b.stride &&
+                     t.conePadded->wrap == t.sampler.wrap);
+            b.conePadded = t.conePadded->texels.data();
+        }
     }
     return b;
 }
@@ -352,6 +382,94 @@ RS_INLINE typename L::F SampleHeightLanes(const LaneTextures& tex, const typenam
         if constexpr (kCount) texelReads[k] = texelReads[k] + float(counts.nTexelReads);
     }
     return out;
+}
+
+/// One fetch per active lane of the cone kernels' combined texture: returns the depth
+/// (SampleHeightLanes exactly) and sets `ratio` to the ratio channel sampled with the
+/// same coordinates, footprint and weights (an RG texture on the GL side), squared when
+/// the map stores sqrt(r). One footprint of texels is read per fetch, as for the depth
+/// alone.
+template <class L>
+RS_INLINE typename L::F SampleHeightConeLanes(
+    const LaneTextures& tex, const typename L::F& u, const typename L::F& v,
+    const typename L::M& active, typename L::F& texelReads, typename L::F& ratio) {
+    using F = typename L::F;
+    using I = typename L::I;
+    const SamplerState& st = tex.sampler;
+    F h(0.0f), c(0.0f);
+    if (tex.depth8) {
+        const auto s = detail::WrapLinearFixed8Lanes<L>(u, tex.width, st.wrap, tex.pow2W);
+        const auto t =
+            detail::WrapLinearFixed8Lanes<L>(v, tex.height, st.wrap, tex.pow2H);
+        const I w(tex.width);
+        const I i00 = t.i0 * w + s.i0, i10 = t.i0 * w + s.i1;
+        const I i01 = t.i1 * w + s.i0, i11 = t.i1 * w + s.i1;
+        auto lerp2 = [&](const uint8_t* data) {
+            auto at = [&](const I& i) {
+                return detail::GatherLanes<I, L::kWidth>(data, size_t(tex.depth8Count),
+                                                         i);
+            };
+            const I r0 = detail::Lerp8Lanes(s.w, at(i00), at(i10));
+            const I r1 = detail::Lerp8Lanes(s.w, at(i01), at(i11));
+            return stdx::static_simd_cast<F>(detail::Lerp8Lanes(t.w, r0, r1)) *
+                   F(float(1.0 / 255.0));
+        };
+        h = lerp2(tex.depth8);
+        c = lerp2(tex.cone8);
+        Assign(active, texelReads, texelReads + F(4.0f));
+    } else if (tex.padded) {
+        if (st.filter == Filter::Nearest) {
+            const I i = detail::WrapNearestLanes<L>(u, tex.width, st.wrap, tex.pow2W);
+            const I j = detail::WrapNearestLanes<L>(v, tex.height, st.wrap, tex.pow2H);
+            const I at = j * I(tex.stride) + i;
+            h = detail::GatherLanes<F, L::kWidth>(tex.padded, size_t(tex.paddedCount),
+                                                  at);
+            c = detail::GatherLanes<F, L::kWidth>(tex.conePadded, size_t(tex.paddedCount),
+                                                  at);
+            Assign(active, texelReads, texelReads + F(1.0f));
+        } else {
+            auto s = detail::WrapLinearLanes<L>(u, tex.width, st.wrap, tex.pow2W);
+            auto t = detail::WrapLinearLanes<L>(v, tex.height, st.wrap, tex.pow2H);
+            const I base = t.i0 * I(tex.stride) + s.i0;
+            const auto fh =
+                detail::LoadFootprint<L>(tex.padded, tex.paddedCount, tex.stride, base);
+            const auto fc = detail::LoadFootprint<L>(tex.conePadded, tex.paddedCount,
+                                                     tex.stride, base);
+            Assign(active, texelReads, texelReads + F(4.0f));
+            if (st.filter == Filter::Min4) {
+                auto min4 = [&](const detail::Footprint<L>& f) {
+                    const F r0 = Select(s.w != F(0.0f), MinSse(f.t00, f.t10), f.t00);
+                    const F r1 = Select(s.w != F(0.0f), MinSse(f.t01, f.t11), f.t01);
+                    return Select(t.w != F(0.0f), MinSse(r0, r1), r0);
+                };
+                h = min4(fh);
+                c = min4(fc);
+            } else {
+                if (st.precision == Precision::Gpu8) {
+                    s.w = stdx::nearbyint(s.w * F(256.0f)) * F(1.0f / 256.0f);
+                    t.w = stdx::nearbyint(t.w * F(256.0f)) * F(1.0f / 256.0f);
+                }
+                auto lerp = [&](const detail::Footprint<L>& f) {
+                    const F r0 = Fma(s.w, f.t10 - f.t00, f.t00);
+                    const F r1 = Fma(s.w, f.t11 - f.t01, f.t01);
+                    return Fma(t.w, r1 - r0, r0);
+                };
+                h = lerp(fh);
+                c = lerp(fc);
+            }
+        }
+    } else {
+        for (int k = 0; k < L::kWidth; ++k) {
+            if (!active[k]) continue;
+            FetchCounts counts;
+            h[k] = SampleCounted(*tex.field, st, u[k], v[k], &counts);
+            FetchCounts unused;
+            c[k] = SampleCounted(*tex.coneField, st, u[k], v[k], &unused);
+            texelReads[k] = texelReads[k] + float(counts.nTexelReads);
+        }
+    }
+    ratio = tex.coneSquared ? c * c : c;
+    return h;
 }
 
 }  // namespace reliefsim

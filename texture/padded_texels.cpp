@@ -1,6 +1,7 @@
 #include "texture/padded_texels.h"
 
 #include "core/error.h"
+#include "texture/lane_sampler.h"
 
 namespace reliefsim {
 
@@ -20,6 +21,13 @@ PaddedTexels PadTexels(const DepthField& field, WrapMode wrap) {
         row[field.width] = field.At(repeat ? 0 : field.width - 1, sj);
     }
     return p;
+}
+
+void BindConeChannel(Textures& t, DepthField cone, bool squared) {
+    RS_CHECK(t.depth && cone.width == t.depth->width && cone.height == t.depth->height);
+    t.conePadded = std::make_shared<const PaddedTexels>(PadTexels(cone, t.sampler.wrap));
+    t.cone = std::make_shared<const DepthField>(std::move(cone));
+    t.coneSquared = squared;
 }
 
 }  // namespace reliefsim

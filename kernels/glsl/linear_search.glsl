@@ -8,15 +8,7 @@
 // 4x2 lane group runs max(fetches of its lanes) trips and pays 8 lane-fetches per trip: the
 // lane-cost model of metrics/summary.h holds exactly. The exit test sits at the END of the
 // trip, so no trip ever starts with every lane finished (which would still execute the
-// unmasked texture instruction). RS_ON_TRIP() and RS_ON_SAMPLE() are the runner's hooks
-// (lane measurement, one-pixel trace); they are empty by default.
-
-#ifndef RS_ON_TRIP
-#define RS_ON_TRIP()
-#endif
-#ifndef RS_ON_SAMPLE
-#define RS_ON_SAMPLE(t, uv, h)
-#endif
+// unmasked texture instruction).
 
 const int kRefineNone = 0, kRefineBinary = 1, kRefineInterval = 2, kRefineSecant = 3,
           kRefinePom = 4;
@@ -25,33 +17,7 @@ const int kPhaseCoarse = 0, kPhaseBottom = 1, kPhaseRefine = 2, kPhaseDone = 3;
 uniform int uLinearSteps;    // coarse steps over t in [0,1]
 uniform int uRefineSteps;    // refinement iterations
 uniform int uRefinement;     // kRefine*
-uniform bool uEarlyExit;     // break out of loops (false: fixed loops, result latched)
-uniform uint uBudget;        // fetches per fragment, 0 = unlimited
 uniform float uSecantTolerance;
-
-struct MarchResult {
-    vec2 uvHit;
-    float depthHit;
-    int nCoarse, nRefine, nFetches;
-    bool hit, budgetExhausted;
-};
-
-// The fetch budget (kernels/kernel.h FetchBudget::Take).
-uint gUsed = 0u;
-bool gExhausted = false;
-bool Take() {
-    if (uBudget != 0u && gUsed >= uBudget) {
-        gExhausted = true;
-        return false;
-    }
-    gUsed = gUsed + 1u;
-    return true;
-}
-
-vec2 At(MarchInput ray, float t) {
-    precise vec2 uv = ray.uvEntry + ray.dirUv * t;
-    return uv;
-}
 
 // LinearSearchKernel::SecantPoint.
 float SecantPoint(float t1, float h1, float t2, float h2) {

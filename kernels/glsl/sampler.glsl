@@ -7,3 +7,15 @@
 uniform sampler2D uHeights;  // depth in [0,1], texel (i, j) centred at ((i+0.5)/W, (j+0.5)/H)
 
 float SampleHeight(vec2 uv) { return textureLod(uHeights, uv, 0.0).r; }
+
+// One fetch of the combined depth + cone-ratio texture of the cone kernels (RG32F, or RG8
+// with the ratio's 8-bit code): depth in .r, the stored ratio in .g, decoded as
+// texture/lane_sampler.h SampleHeightConeLanes does (squared for the sqrt encoding).
+uniform int uConeSquared;  // 1: the ratio is stored as sqrt(r) (Dummer; 004 Alg. 4)
+
+vec2 SampleHeightCone(vec2 uv) {
+    vec4 x = textureLod(uHeights, uv, 0.0);
+    precise float r = x.g;
+    if (uConeSquared != 0) r = r * r;
+    return vec2(x.r, r);
+}

@@ -11,10 +11,12 @@ uniform float uTiling;          // uv repeats across the plane
 uniform float uDepthScale;      // relief depth in plane units
 uniform int uOrtho;             // 1: the orthographic texture-space view
 uniform vec2 uOrthoDirUv;       // its ray's uv per unit depth
+uniform float uOrthoViewZ;      // its |view.z| of the unit view direction
 
 struct MarchInput {
     vec2 uvEntry;  // uv where the ray enters the relief (tiling included)
     vec2 dirUv;    // uv travelled per unit depth
+    float viewZ;   // |view.z| of the unit view direction
 };
 
 MarchInput PixelToRay(int px, int py) {
@@ -26,6 +28,7 @@ MarchInput PixelToRay(int px, int py) {
         precise float ov = fy / uHeight;
         o.uvEntry = vec2(ou, ov);
         o.dirUv = uOrthoDirUv;
+        o.viewZ = uOrthoViewZ;
         return o;
     }
     precise float ndcX = (fx * 2.0) / uWidth - 1.0;
@@ -45,5 +48,8 @@ MarchInput PixelToRay(int px, int py) {
     precise float dv = (dy / dz) * k;
     r.uvEntry = vec2(u0, v0);
     r.dirUv = vec2(du, dv);
+    precise float len = sqrt((dx * dx + dy * dy) + dz * dz);
+    precise float vz = -dz / len;
+    r.viewZ = vz;
     return r;
 }

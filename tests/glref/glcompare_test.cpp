@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <memory>
 #include <string>
@@ -91,7 +92,9 @@ std::vector<Case> AllCases() {
 std::string CaseName(const testing::TestParamInfo<Case>& info) {
     const Case& c = info.param;
     std::string map = c.map.substr(c.map.find(':') + 1);
-    return c.method + "_" + map + "_" + std::to_string(c.size) + "_" +
+    std::string method = c.method;  // test names take no '-'
+    std::replace(method.begin(), method.end(), '-', '_');
+    return method + "_" + map + "_" + std::to_string(c.size) + "_" +
            std::string(ToString(c.format));
 }
 

@@ -1,0 +1,262 @@
+// Cone step mapping (Dummer 2006; dissertation 004 Alg. 4, §2.4; ACM paper 000 §II-A)
+// and relaxed cone stepping with its binary search (Policarpo & Oliveira, GPU Gems 3
+// ch. 18, Listing 18-3). Two methods, one source: ConeStep<kRelaxed>.
+//
+// Conventions (DESIGN.md): p(t) = (uvEntry + t * dirUv, t), t the ray's depth; a cone
+// ratio r is the cone's radius in uv per unit of depth, so the ray moves |dirUv| uv per
+// unit depth whatever the depth scale or tiling.
+//
+// The step. At the ray point of depth t over surface depth D with ratio r, the cone's
+// apex sits on the surface at (uv, D) and opens upward; the ray meets its side after a
+// depth advance d with d |dirUv| = r (D - t - d):
+//   d = r (D - t) / (|dirUv| + r)              (Listing 18-3; 000 eq. (3): gamma
+//                                               = xi / (xi + |Vxy|) with xi = r)
+// Alg. 4 writes the same step along the unit direction rd = (dirUv, 1) / |(dirUv, 1)|:
+//   s = (D - t) / (|rd_xy| / r + rd_z),  t += s rd_z
+// (its iz = sqrt(1 - rd_z^2) is |rd_xy|). The two are equal in exact arithmetic and round
+// differently; `cone_step` picks one (0: Listing 18-3, the default; 1: Alg. 4).
+//
+// Each trip fetches the depth and the ratio at the ray point in ONE fetch: the papers
+// store both in one texture (Listing 18-3: depth in A, ratio in B; Dummer likewise), so a
+// step is one texture() call and one footprint of texels. The driver hands the kernel the
+// decoded ratio (texture/lane_sampler.h SampleHeightConeLanes: squared for the
+// dissertation's sqrt encoding, as Alg. 4's GETCONERATIO(p)^2).
+//
+// csm (Alg. 4): at most cone_steps trips; a trip whose point is inside (t >= D) ends the
+// search there (early_exit = 1) or, in fixed loops (early_exit = 0), keeps fetching at
+// the latched point as Listing 18-3's saturate() does (d = 0 once inside). The result
+// is the ray point where the search stopped; `hit` says whether it is inside.
+//
+// rcs (Listing 18-3): cone_steps relaxed steps with d from saturate(D - t) (the relaxed
+// cone may pierce the surface; a point inside stays where it is), then refine_steps
+// binary steps between the half-way point H and the stopping point K: range = tK / 2,
+// tb = tK / 2; per step fetch D(tb), halve range, tb += range if tb < D (outside) else
+// tb -= range. The result is tb after the last move. Fixed loops by default, as the
+// listing: a pixel costs exactly cone_steps + refine_steps fetches. early_exit = 1 ends
+// the relaxed loop at the first point inside (the binary search then starts there).
+// `hit` is whether the relaxed loop reached a point inside.
+#pragma once
+
+#include <array>
+#include <cmath>
+
+#include "kernels/kernel.h"
+
+namespace reliefsim {
+
+namespace detail {
+
+inline constexpr ParamSpec ConeSteps(double def) {
+    return {"cone_steps", def, 1, 1024, true, "cone steps (coarse iterations)",
+            "uConeSteps"};
+}
+inline constexpr ParamSpec kConeStepForm = {
+    "cone_step",
+    0,
+    0,
+    1,
+    true,
+    "step formula: 0 = r (D - t) / (|dirUv| + r) (Listing 18-3); 1 = Alg. 4's unit-ray "
+    "form",
+    "uConeStepForm"};
+inline constexpr std::array<std::string_view, 1> kConeMaps = {"cone"};
+inline constexpr std::array<std::string_view, 1> kRelaxedMaps = {"relaxed"};
+
+template <bool kRelaxed>
+struct ConeStepPreset;
+template <>
+struct ConeStepPreset<false> {
+    static constexpr std::string_view kName = "csm", kTitle = "cone step mapping",
+                                      kSource =
+                                          "Burger 2018 (004) Alg. 4; Dummer 2006; Chen & "
+                                          "Chuang 2009 (000) §II-A";
+    static constexpr std::array<ParamSpec, 4> kParams = {ConeSteps(15), kConeStepForm,
+                                                         kEarlyExitParam, kBudgetParam};
+    static constexpr auto& kMaps = kConeMaps;
+    static constexpr std::string_view kEncoding = "u8sqrt";  // Dummer; 004 §2.4
+};
+inline constexpr ParamSpec kEarlyExitFixed = {
+    "early_exit",
+    0,
+    0,
+    1,
+    true,
+    "1: leave the cone loop at the first point inside; 0: fixed loops as Listing 18-3",
+    "uEarlyExit"};
+template <>
+struct ConeStepPreset<true> {
+    static constexpr std::string_view
+        kName = "rcs",
+        kTitle = "relaxed cone stepping + binary search",
+        kSource = "Policarpo & Oliveira, GPU Gems 3 ch. 18 (001) Listing 18-3";
+    static constexpr std::array<ParamSpec, 5> kParams = {
+        ConeSteps(15),
+        {"refine_steps", 6, 0, 64, true, "binary-search steps", "uRefineSteps"},
+        kConeStepForm,
+        kEarlyExitFixed,
+        kBudgetParam};
+    static constexpr auto& kMaps = kRelaxedMaps;
+    static constexpr std::string_view kEncoding = "u8";  // GPU Gems 3: ratio in B, 8 bit
+};
+
+}  // namespace detail
+
+template <bool kRelaxed>
+struct ConeStep {
+    using Preset = detail::ConeStepPreset<kRelaxed>;
+    static constexpr bool kReadsRatio = true;
+    static constexpr std::array<GlslConstant, 1> kGlslConstants = {
+        GlslConstant{"uRelaxed", kRelaxed ? 1 : 0}};
+
+    static const KernelInfo& Info() {
+        static const KernelInfo info{Preset::kName,   Preset::kTitle,   Preset::kSource,
+                                     Preset::kParams, Preset::kMaps,    "cone_step.glsl",
+                                     kGlslConstants,  Preset::kEncoding};
+        return info;
+    }
+
+    struct Params {
+        int coneSteps = 15;
+        int refineSteps = 0;
+        bool unitRayForm = false;
+        bool earlyExit = true;
+    };
+    static Params FromValues(const ParamValues& v) {
+        auto get = [&](std::string_view name) {
+            if (auto it = v.find(name); it != v.end()) return it->second;
+            for (const ParamSpec& p : Preset::kParams)
+                if (p.name == name) return p.defaultValue;
+            return 0.0;
+        };
+        Params p;
+        p.coneSteps = int(get("cone_steps"));
+        p.refineSteps = int(get("refine_steps"));
+        p.unitRayForm = get("cone_step") != 0.0;
+        p.earlyExit = get("early_exit") != 0.0;
+        return p;
+    }
+
+    enum Phase { kCone = 0, kRefine = 1, kDone = 2 };
+
+    template <class L>
+    struct State {
+        using F = typename L::F;
+        F t;                 // the cone loop's ray depth
+        F rayRatio;          // |dirUv| (Listing 18-3's ray_ratio)
+        F rdXy, rdZ;         // Alg. 4's |rd_xy| and rd_z
+        F nCoarse, nRefine;  // the loops' counters
+        F tb, range;         // binary search (rcs)
+        F phase;
+        typename L::M inside;  // the cone loop reached a point inside
+    };
+
+    template <class L>
+    static void Begin(const Params&, const LaneRay<L>& ray, State<L>& s,
+                      Fetch<L>& first) {
+        using F = typename L::F;
+        const F zero(0.0f);
+        s.t = s.nCoarse = s.nRefine = s.tb = s.range = zero;
+        const F sq = ray.du * ray.du + ray.dv * ray.dv;
+        s.rayRatio = stdx::sqrt(sq);
+        const F len = stdx::sqrt(sq + F(1.0f));
+        s.rdXy = s.rayRatio / len;
+        s.rdZ = F(1.0f) / len;
+        s.phase = F(float(kCone));
+        s.inside = typename L::M(false);
+        first.t = zero;
+        first.u = ray.U(zero);
+        first.v = ray.V(zero);
+    }
+
+    /// The cone step's depth advance from t over depth h with ratio r (>= 0 when t < h).
+    template <class F>
+    RS_INLINE static F Advance(const Params& p, const F& t, const F& h, const F& r,
+                               const F& rayRatio, const F& rdXy, const F& rdZ) {
+        if (p.unitRayForm) {
+            const F s = (h - t) / (rdXy / r + rdZ);
+            return s * rdZ;
+        }
+        return (r * (h - t)) / (rayRatio + r);
+    }
+
+    template <class L>
+    RS_INLINE static typename L::M Step(const Params& p, const LaneRay<L>& ray,
+                                        State<L>& s, const Sample<L>& x,
+                                        const typename L::M& active, Fetch<L>& next) {
+        using F = typename L::F;
+        using M = typename L::M;
+        const F one(1.0f), zero(0.0f);
+        M want(false);
+        F tq = next.t;
+        const M cone = active && (s.phase == F(float(kCone)));
+        const M refine = active && (s.phase == F(float(kRefine)));
+        if (Any(cone)) {
+            Assign(cone, s.nCoarse, s.nCoarse + one);
+            const M in = cone && (s.t >= x.h);
+            s.inside = s.inside || in;
+            // Outside: step along the cone (r = 0 advances nothing: the ray stalls, as
+            // the method does at a zero ratio). Inside: stay (saturate(D - t) = 0).
+            const M out = cone && !in;
+            // (x.h - t) > 0 where out; the advance is computed on every lane and kept
+            // where out, so a lane inside never divides by a zero ratio's result.
+            const F d = Advance(p, s.t, x.h, x.ratio, s.rayRatio, s.rdXy, s.rdZ);
+            Assign(out && (d > zero), s.t, s.t + d);
+            const M stopEarly = p.earlyExit ? in : M(false);
+            const M last = cone && (s.nCoarse >= F(float(p.coneSteps)));
+            const M stop = (cone && stopEarly) || last;
+            const M more = cone && !stop;
+            Assign(more, tq, s.t);
+            want = want || more;
+            if constexpr (kRelaxed) {
+                // The binary search between H (tK / 2) and K (tK).
+                Assign(stop, s.range, s.t * F(0.5f));
+                Assign(stop, s.tb, s.t * F(0.5f));
+                const M go = stop && (F(float(p.refineSteps)) > zero);
+                Assign(stop, s.phase, F(float(kDone)));
+                Assign(go, s.phase, F(float(kRefine)));
+                Assign(go, tq, s.tb);
+                want = want || go;
+            } else {
+                Assign(stop, s.phase, F(float(kDone)));
+            }
+        }
+        if constexpr (kRelaxed) {
+            if (Any(refine)) {
+                Assign(refine, s.nRefine, s.nRefine + one);
+                Assign(refine, s.range, s.range * F(0.5f));
+                const M outside = refine && (s.tb < x.h);
+                Assign(outside, s.tb, s.tb + s.range);
+                Assign(refine && !outside, s.tb, s.tb - s.range);
+                const M more = refine && (s.nRefine < F(float(p.refineSteps)));
+                Assign(refine && !more, s.phase, F(float(kDone)));
+                Assign(more, tq, s.tb);
+                want = want || more;
+            }
+        }
+        next.t = tq;
+        next.u = ray.U(tq);
+        next.v = ray.V(tq);
+        return want;
+    }
+
+    template <class L>
+    static void End(const Params&, const LaneRay<L>& ray, const State<L>& s,
+                    LaneOutcome<L>& out) {
+        using F = typename L::F;
+        // A lane stopped in the cone loop (by the budget, or csm at its end) answers its
+        // current point; rcs after (or during) the binary search answers tb.
+        F tResult = s.t;
+        if constexpr (kRelaxed) tResult = Select(s.phase == F(float(kCone)), s.t, s.tb);
+        out.u = ray.U(tResult);
+        out.v = ray.V(tResult);
+        out.depth = tResult;
+        out.nCoarse = s.nCoarse;
+        out.nRefine = s.nRefine;
+        out.hit = s.inside;
+    }
+};
+
+using CsmKernel = ConeStep<false>;
+using RcsKernel = ConeStep<true>;
+
+}  // namespace reliefsim

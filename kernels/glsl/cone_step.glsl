@@ -1,0 +1,90 @@
+// GLSL twin of kernels/cone_step.h: cone step mapping (004 Alg. 4) and, with uRelaxed,
+// relaxed cone stepping with its binary search (001 Listing 18-3). One fetch per trip of
+// the combined texture (depth in .r, cone ratio in .g; sampler.glsl SampleHeightCone),
+// the same float operations in the same order as the C++ kernel.
+
+uniform int uConeSteps;     // cone steps
+uniform int uRefineSteps;   // binary steps (rcs)
+uniform int uConeStepForm;  // 0: Listing 18-3's step; 1: Alg. 4's unit-ray form
+uniform int uRelaxed;       // 1: rcs
+
+const int kConePhaseCone = 0, kConePhaseRefine = 1, kConePhaseDone = 2;
+
+MarchResult March(MarchInput ray) {
+    precise float sq = ray.dirUv.x * ray.dirUv.x + ray.dirUv.y * ray.dirUv.y;
+    precise float rayRatio = sqrt(sq);
+    precise float len = sqrt(sq + 1.0);
+    precise float rdXy = rayRatio / len;
+    precise float rdZ = 1.0 / len;
+    precise float t = 0.0, tb = 0.0, range = 0.0, tq = 0.0;
+    int nCoarse = 0, nRefine = 0;
+    bool inside = false;
+    int phase = kConePhaseCone;
+
+    gUsed = 0u;
+    gExhausted = false;
+    Take();  // the first fetch (a budget, when set, is >= 1)
+    do {
+        RS_ON_TRIP();
+        vec2 x = SampleHeightCone(At(ray, tq));
+        precise float h = x.x;
+        precise float r = x.y;
+        RS_ON_SAMPLE(tq, At(ray, tq), h);
+        bool want = false;
+        if (phase == kConePhaseCone) {
+            nCoarse = nCoarse + 1;
+            bool isIn = t >= h;
+            inside = inside || isIn;
+            precise float d;
+            if (uConeStepForm != 0) {
+                precise float s = (h - t) / (rdXy / r + rdZ);
+                d = s * rdZ;
+            } else {
+                d = (r * (h - t)) / (rayRatio + r);
+            }
+            if (!isIn && d > 0.0) t = t + d;
+            bool stop = (uEarlyExit && isIn) || nCoarse >= uConeSteps;
+            if (!stop) {
+                tq = t;
+                want = true;
+            } else if (uRelaxed != 0) {
+                range = t * 0.5;
+                tb = t * 0.5;
+                phase = kConePhaseDone;
+                if (uRefineSteps > 0) {
+                    phase = kConePhaseRefine;
+                    tq = tb;
+                    want = true;
+                }
+            } else {
+                phase = kConePhaseDone;
+            }
+        } else {  // kConePhaseRefine
+            nRefine = nRefine + 1;
+            range = range * 0.5;
+            if (tb < h)
+                tb = tb + range;
+            else
+                tb = tb - range;
+            if (nRefine < uRefineSteps) {
+                tq = tb;
+                want = true;
+            } else {
+                phase = kConePhaseDone;
+            }
+        }
+        if (want && !Take()) want = false;
+        if (!want) break;
+    } while (true);
+
+    precise float tResult = (uRelaxed != 0 && phase != kConePhaseCone) ? tb : t;
+    MarchResult m;
+    m.uvHit = At(ray, tResult);
+    m.depthHit = tResult;
+    m.nCoarse = nCoarse;
+    m.nRefine = nRefine;
+    m.nFetches = int(gUsed);
+    m.hit = inside;
+    m.budgetExhausted = gExhausted;
+    return m;
+}

@@ -1,0 +1,46 @@
+// The derived maps a kernel reads (KernelInfo::maps), made for a height field and bound
+// with its textures: generated with the maps/ generators, encoded as the kernel's paper
+// stores them (KernelInfo::mapEncoding, --cone-encoding overrides), and kept in the disk
+// cache (maps/map_cache.h) keyed by the field's texels and the map's parameters.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include "kernels/registry.h"
+#include "maps/cone_map.h"
+#include "texture/lane_sampler.h"
+
+namespace reliefsim {
+
+/// Where and how the kernels' maps are made (render, trace, glcompare, sweep).
+struct KernelMapSettings {
+    std::optional<ConeEncoding> encoding;  ///< --cone-encoding; unset: the kernel's own
+    std::string cacheDir;                  ///< --cache-dir; "": DefaultMapCacheDir()
+    bool useCache = true;                  ///< --no-cache turns it off
+};
+
+/// $XDG_CACHE_HOME/reliefsim, else $HOME/.cache/reliefsim, else "" (no cache).
+std::string DefaultMapCacheDir();
+
+/// The encoding the kernel's maps are stored in: the override, else the kernel's.
+ConeEncoding KernelMapEncoding(const Kernel& kernel, const KernelMapSettings& maps);
+
+/// Throws Error for settings no kernel map can use with this sampler (an 8-bit height
+/// texture needs an 8-bit cone encoding: the GL texture holds both in one RG8).
+void ValidateKernelMaps(const Kernel& kernel, const SamplerState& sampler,
+                        const KernelMapSettings& maps);
+
+/// The textures `kernel` reads over `field`: the height (BindTextures) and, for a kernel
+/// with maps, its cone channel. A cache that cannot be written is skipped (the map is
+/// still made); *cacheHit tells whether the map came from the cache.
+Textures BindKernelTextures(const DepthField& field, const SamplerState& sampler,
+                            const Kernel& kernel, const KernelMapSettings& maps,
+                            bool* cacheHit = nullptr);
+
+/// The cone channel as BindKernelTextures binds it (the stored texel values; codes in
+/// depth8 for 8-bit encodings): what the GL runner uploads as the texture's G channel.
+DepthField KernelConeChannel(const DepthField& field, const Kernel& kernel,
+                             const KernelMapSettings& maps, bool* cacheHit = nullptr);
+
+}  // namespace reliefsim
