@@ -12,8 +12,10 @@
 #include <cstdlib>
 #include <cstring>
 #include <sstream>
+#include <type_traits>
 #include <utility>
 #include <variant>
+#include <vector>
 
 #include "core/error.h"
 
@@ -332,22 +334,18 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     if (scene.cone) {
         // The cone kernels' combined texture: depth in R, the stored ratio in G.
         const DepthField& c = *scene.cone;
-        const size_t n = size_t(field.width) * size_t(field.height);
-        if (scene.format == TextureFormat::R8) {
-            std::vector<uint8_t> rg(2 * n);
-            for (size_t i = 0; i < n; ++i)
-                rg[2 * i] = field.depth8[i], rg[2 * i + 1] = c.depth8[i];
-            glTexStorage2D(GL_TEXTURE_2D, 1, GL_RG8, field.width, field.height);
+        auto upload = [&](GLenum internalFormat, GLenum type, const auto& r,
+                          const auto& g) {
+            std::vector<std::decay_t<decltype(r[0])>> rg(2 * r.size());
+            for (size_t i = 0; i < r.size(); ++i) rg[2 * i] = r[i], rg[2 * i + 1] = g[i];
+            glTexStorage2D(GL_TEXTURE_2D, 1, internalFormat, field.width, field.height);
             glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, field.width, field.height, GL_RG,
-                            GL_UNSIGNED_BYTE, rg.data());
-        } else {
-            std::vector<float> rg(2 * n);
-            for (size_t i = 0; i < n; ++i)
-                rg[2 * i] = field.depth[i], rg[2 * i + 1] = c.depth[i];
-            glTexStorage2D(GL_TEXTURE_2D, 1, GL_RG32F, field.width, field.height);
-            glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, field.width, field.height, GL_RG,
-                            GL_FLOAT, rg.data());
-        }
+                            type, rg.data());
+        };
+        if (scene.format == TextureFormat::R8)
+            upload(GL_RG8, GL_UNSIGNED_BYTE, field.depth8, c.depth8);
+        else
+            upload(GL_RG32F, GL_FLOAT, field.depth, c.depth);
     } else if (scene.format == TextureFormat::R8) {
         glTexStorage2D(GL_TEXTURE_2D, 1, GL_R8, field.width, field.height);
         glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, field.width, field.height, GL_RED,

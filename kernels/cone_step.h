@@ -123,10 +123,7 @@ struct ConeStep {
     };
     static Params FromValues(const ParamValues& v) {
         auto get = [&](std::string_view name) {
-            if (auto it = v.find(name); it != v.end()) return it->second;
-            for (const ParamSpec& p : Preset::kParams)
-                if (p.name == name) return p.defaultValue;
-            return 0.0;
+            return ParamValue(v, Preset::kParams, name);
         };
         Params p;
         p.coneSteps = int(get("cone_steps"));

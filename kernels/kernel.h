@@ -96,6 +96,17 @@ struct KernelInfo {
 /// Parameter values by name: every parameter of the method, defaults filled in.
 using ParamValues = std::map<std::string, double, std::less<>>;
 
+/// The value of parameter `name`, else its default among `specs` (so defaults live only
+/// in the ParamSpecs), else 0: a parameter the kernel does not have and does not read.
+/// What every kernel's FromValues reads its parameters with.
+inline double ParamValue(const ParamValues& v, std::span<const ParamSpec> specs,
+                         std::string_view name) {
+    if (auto it = v.find(name); it != v.end()) return it->second;
+    for (const ParamSpec& p : specs)
+        if (p.name == name) return p.defaultValue;
+    return 0.0;
+}
+
 /// The parameters every kernel has; the driver reads "budget".
 inline constexpr ParamSpec kEarlyExitParam = {
     "early_exit",

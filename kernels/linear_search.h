@@ -106,17 +106,6 @@ struct LinearSearchPreset<Refinement::Pom> {
                                                          kBudgetParam};
 };
 
-/// The value of parameter `name`, else its default among `specs` (so defaults live only
-/// in the ParamSpecs), else 0: a parameter the preset does not have and does not read.
-template <size_t N>
-double ParamValue(const ParamValues& v, const std::array<ParamSpec, N>& specs,
-                  std::string_view name) {
-    if (auto it = v.find(name); it != v.end()) return it->second;
-    for (const ParamSpec& p : specs)
-        if (p.name == name) return p.defaultValue;
-    return 0.0;
-}
-
 }  // namespace detail
 
 template <Refinement R>
@@ -146,7 +135,7 @@ struct LinearSearch {
     static Params FromValues(const ParamValues& v) {
         Params p;
         auto get = [&](std::string_view name) {
-            return detail::ParamValue(v, Preset::kParams, name);
+            return ParamValue(v, Preset::kParams, name);
         };
         p.linearSteps = int(get("linear_steps"));
         p.refineSteps = int(get("refine_steps"));

@@ -73,10 +73,10 @@ DepthField KernelConeChannel(const DepthField& field, const Kernel& kernel,
     c.height = field.height;
     c.name = field.name + " (" + std::string(ToString(kind)) + " " +
              std::string(ToString(enc)) + ")";
-    c.depth.resize(map.values.size());
     if (enc == ConeEncoding::Float) {
         c.depth = map.values;
     } else {
+        c.depth.resize(map.values.size());
         std::vector<uint16_t> codes;
         QuantizeConeMap(map, enc, &codes);
         RS_CHECK(codes.size() == map.values.size());

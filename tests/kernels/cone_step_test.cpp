@@ -11,6 +11,7 @@
 #include "render/frame.h"
 #include "render/kernel_maps.h"
 #include "render/scene.h"
+#include "tests/kernels/every_width.h"
 #include "texture/procedural.h"
 
 using namespace reliefsim;
@@ -39,16 +40,7 @@ RayRun RunCone(const char* method, const DepthField& f, const MarchInput& in,
     std::shared_ptr<const void> params;
     const BatchJob job =
         MakeBatchJob(kernel, BindKernelTextures(f, {}, kernel, maps), params);
-    const RayRun one = MarchRay(job, in);
-    for (const LaneWidthInfo& w : LaneWidths()) {
-        if (!w.supported) continue;
-        const RayRun r = MarchRayAt(w, job, in);
-        EXPECT_EQ(std::bit_cast<uint32_t>(r.result.depthHit),
-                  std::bit_cast<uint32_t>(one.result.depthHit))
-            << w.width;
-        EXPECT_EQ(r.counts.nFetches, one.counts.nFetches) << w.width;
-    }
-    return one;
+    return test::MarchEveryWidth(job, in);
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include "kernels/registry.h"
 #include "render/batch.h"
 #include "render/view_ray.h"
+#include "tests/kernels/every_width.h"
 #include "texture/procedural.h"
 #include "texture/sampler.h"
 
@@ -71,19 +72,7 @@ MarchRun March(const TestKernel& k, const DepthField& f, MarchInput in,
     std::shared_ptr<const void> params;
     const BatchJob job = MakeBatchJob(reliefsim::MakeKernel(info, values),
                                       reliefsim::BindTextures(f, st), params);
-    const RayRun one = MarchRay(job, in);
-    for (const LaneWidthInfo& w : LaneWidths()) {
-        if (!w.supported) continue;
-        const RayRun r = MarchRayAt(w, job, in);
-        EXPECT_EQ(std::bit_cast<uint32_t>(r.result.uvHit.x),
-                  std::bit_cast<uint32_t>(one.result.uvHit.x))
-            << w.width;
-        EXPECT_EQ(std::bit_cast<uint32_t>(r.result.depthHit),
-                  std::bit_cast<uint32_t>(one.result.depthHit))
-            << w.width;
-        EXPECT_EQ(r.counts.nFetches, one.counts.nFetches) << w.width;
-        EXPECT_EQ(r.result.nRefine, one.result.nRefine) << w.width;
-    }
+    const RayRun one = test::MarchEveryWidth(job, in);
     return {one.result, one.counts};
 }
 

@@ -8,6 +8,7 @@
 #include "kernels/registry.h"
 #include "render/batch.h"
 #include "render/view_ray.h"
+#include "tests/kernels/every_width.h"
 #include "texture/sampler.h"
 
 using namespace reliefsim;
@@ -34,18 +35,7 @@ RayRun RunMethod(const char* method, const DepthField& f, const MarchInput& in,
     const BatchJob job =
         MakeBatchJob(MakeKernel(info, values),
                      BindTextures(f, {Filter::Bilinear, WrapMode::Clamp}), params);
-    const RayRun one = MarchRay(job, in);
-    for (const LaneWidthInfo& w : LaneWidths()) {
-        if (!w.supported) continue;
-        const RayRun r = MarchRayAt(w, job, in);
-        EXPECT_EQ(std::bit_cast<uint32_t>(r.result.uvHit.x),
-                  std::bit_cast<uint32_t>(one.result.uvHit.x))
-            << w.width;
-        EXPECT_EQ(std::bit_cast<uint32_t>(r.result.depthHit),
-                  std::bit_cast<uint32_t>(one.result.depthHit))
-            << w.width;
-    }
-    return one;
+    return test::MarchEveryWidth(job, in);
 }
 
 }  // namespace
