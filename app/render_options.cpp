@@ -2,6 +2,7 @@
 // benchmark.
 #include "app/render_options.h"
 
+#include <cctype>
 #include <cstdio>
 #include <filesystem>
 
@@ -109,6 +110,20 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
         ->type_name("DIR");
     cmd->add_flag("!--no-cache", o.settings.maps.useCache,
                   "cone kernels: generate their maps without the disk cache");
+    cmd->add_option("--cone-map", o.settings.maps.coneMap,
+                    "cone kernels: use this map (EXR, PNG, TGA, ... of the height map's "
+                    "size) instead of generating one, e.g. GPU Gems 3's "
+                    "tile1_relaxedcone.tga with --cone-map-channel B")
+        ->type_name("FILE");
+    cmd->add_option("--cone-map-channel", o.coneMapChannel,
+                    "with --cone-map: the ratio's channel, R|G|B|A (default R); "
+                    "directional kernels (qcsm, acm4) read RGBA")
+        ->type_name("C");
+    cmd->add_option("--cone-map-encoding", o.coneMapEncoding,
+                    "with --cone-map: how its values store the ratio, " +
+                        ConeEncodingList() +
+                        " (default: the kernel's, as --cone-encoding)")
+        ->type_name("ENC");
     if (!withHeatmapScales) return;
     cmd->add_flag("--reference,!--no-reference", o.settings.reference,
                   "also compute the exact reference of every pixel and the metrics "
@@ -157,6 +172,35 @@ void ResolveRenderSettings(RenderOptions& o) {
             throw Error("--cone-encoding \"" + o.coneEncoding +
                         "\": unknown; must be one of: " + ConeEncodingList());
         s.maps.encoding = *e;
+    }
+    if (s.maps.coneMap.empty()) {
+        if (!o.coneMapChannel.empty())
+            throw Error("--cone-map-channel: applies with --cone-map");
+        if (!o.coneMapEncoding.empty())
+            throw Error("--cone-map-encoding: applies with --cone-map");
+    } else {
+        if (!o.coneEncoding.empty())
+            throw Error(
+                "--cone-encoding: applies to generated maps; give the encoding of "
+                "--cone-map's values with --cone-map-encoding");
+        if (!o.coneMapEncoding.empty()) {
+            const auto e = ParseConeEncoding(o.coneMapEncoding);
+            if (!e)
+                throw Error("--cone-map-encoding \"" + o.coneMapEncoding +
+                            "\": unknown; must be one of: " + ConeEncodingList());
+            s.maps.encoding = *e;
+        }
+        if (!o.coneMapChannel.empty()) {
+            static constexpr std::string_view kChannels = "RGBA";
+            const std::string& c = o.coneMapChannel;
+            const size_t at =
+                c.size() == 1
+                    ? kChannels.find(char(std::toupper(static_cast<unsigned char>(c[0]))))
+                    : std::string_view::npos;
+            if (at == std::string_view::npos)
+                throw Error("--cone-map-channel \"" + c + "\": must be R, G, B or A");
+            s.maps.coneMapChannel = int(at);
+        }
     }
     if (!s.maps.cacheDir.empty()) {
         std::error_code ec;

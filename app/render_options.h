@@ -28,7 +28,9 @@ struct RenderOptions {
     std::string iterScale, fetchScale;  ///< MIN:MAX; empty: the settings' scale
     std::string viewDir;                ///< X,Y,Z (--view-dir); empty: the settings'
     const CLI::Option* viewDirOption = nullptr;
-    std::string coneEncoding;  ///< --cone-encoding; empty: the kernel's own
+    std::string coneEncoding;     ///< --cone-encoding; empty: the kernel's own
+    std::string coneMapChannel;   ///< --cone-map-channel R|G|B|A
+    std::string coneMapEncoding;  ///< --cone-map-encoding
 };
 
 /// Adds render's scene options (map, method, set, size, camera, sampler, texture format,

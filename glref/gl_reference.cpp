@@ -133,8 +133,8 @@ struct GlReference::Impl {
     std::string renderer;
     bool hasBallot = false;
 
-    GLuint program = 0, vao = 0, vbo = 0, ibo = 0, texture = 0, fbo = 0, ssbo = 0,
-           traceBuffer = 0;
+    GLuint program = 0, vao = 0, vbo = 0, ibo = 0, texture = 0, coneArray = 0, fbo = 0,
+           ssbo = 0, traceBuffer = 0;
     bool tracing = false;
     static constexpr int kTraceCapacity = 4096;
     GLuint targets[2] = {0, 0};
@@ -153,9 +153,10 @@ struct GlReference::Impl {
         if (ssbo) glDeleteBuffers(1, &ssbo);
         if (traceBuffer) glDeleteBuffers(1, &traceBuffer);
         if (texture) glDeleteTextures(1, &texture);
+        if (coneArray) glDeleteTextures(1, &coneArray);
         if (fbo) glDeleteFramebuffers(1, &fbo);
         if (targets[0]) glDeleteTextures(2, targets);
-        program = vao = vbo = ibo = ssbo = traceBuffer = texture = fbo = 0;
+        program = vao = vbo = ibo = ssbo = traceBuffer = texture = coneArray = fbo = 0;
         targets[0] = targets[1] = 0;
     }
 };
@@ -236,15 +237,23 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
             "--filter min4 with --texture-format r8: not compared (llvmpipe's 8-bit "
             "AoS path with a min reduction is not modelled); use r32f");
     if (!scene.kernel.Info().maps.empty()) {
-        if (!scene.cone || scene.cone->width != field.width ||
-            scene.cone->height != field.height)
-            throw Error("GL reference: kernel " + std::string(scene.kernel.Info().name) +
-                        " reads a cone map and the scene has none of the field's size");
-        if (scene.format == TextureFormat::R8 &&
-            scene.cone->depth8.size() != size_t(field.width) * size_t(field.height))
-            throw Error(
-                "GL reference: an R8 height texture needs the cone map's 8-bit "
-                "codes (--cone-encoding u8 or u8sqrt)");
+        const KernelInfo& info = scene.kernel.Info();
+        if (scene.cone.size() != size_t(info.mapLayers))
+            throw Error("GL reference: kernel " + std::string(info.name) + " reads a " +
+                        std::to_string(info.mapLayers) +
+                        "-layer cone map and the scene has " +
+                        std::to_string(scene.cone.size()));
+        for (const auto& layer : scene.cone) {
+            if (!layer || layer->width != field.width || layer->height != field.height)
+                throw Error("GL reference: kernel " + std::string(info.name) +
+                            " reads a cone map and the scene has none of the field's "
+                            "size");
+            if (scene.format == TextureFormat::R8 &&
+                layer->depth8.size() != size_t(field.width) * size_t(field.height))
+                throw Error(
+                    "GL reference: an R8 height texture needs the cone map's 8-bit "
+                    "codes (--cone-encoding u8 or u8sqrt)");
+        }
     }
     if (scene.kernel.Info().glslFile.empty())
         throw Error("GL reference: kernel " + std::string(scene.kernel.Info().name) +
@@ -331,13 +340,18 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D, m.texture);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    if (scene.cone) {
-        // The cone kernels' combined texture: depth in R, the stored ratio in G.
-        const DepthField& c = *scene.cone;
+    // The cone kernels' combined texels: depth in R, the stored ratio in G.
+    auto interleave = [](const auto& r, const auto& g) {
+        std::vector<std::decay_t<decltype(r[0])>> rg(2 * r.size());
+        for (size_t i = 0; i < r.size(); ++i) rg[2 * i] = r[i], rg[2 * i + 1] = g[i];
+        return rg;
+    };
+    const bool layered = scene.cone.size() > 1;
+    if (scene.cone.size() == 1) {
+        const DepthField& c = *scene.cone[0];
         auto upload = [&](GLenum internalFormat, GLenum type, const auto& r,
                           const auto& g) {
-            std::vector<std::decay_t<decltype(r[0])>> rg(2 * r.size());
-            for (size_t i = 0; i < r.size(); ++i) rg[2 * i] = r[i], rg[2 * i + 1] = g[i];
+            const auto rg = interleave(r, g);
             glTexStorage2D(GL_TEXTURE_2D, 1, internalFormat, field.width, field.height);
             glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, field.width, field.height, GL_RG,
                             type, rg.data());
@@ -366,6 +380,37 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
     if (scene.sampler.filter == Filter::Min4)
         glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_REDUCTION_MODE_ARB, GL_MIN);
+    if (layered) {
+        // The directional kernels' layers: one RG (depth, ratio) layer per direction
+        // class, on unit 1, sampled like the height texture.
+        glGenTextures(1, &m.coneArray);
+        glActiveTexture(GL_TEXTURE1);
+        glBindTexture(GL_TEXTURE_2D_ARRAY, m.coneArray);
+        const GLsizei n = GLsizei(scene.cone.size());
+        const bool r8 = scene.format == TextureFormat::R8;
+        glTexStorage3D(GL_TEXTURE_2D_ARRAY, 1, r8 ? GL_RG8 : GL_RG32F, field.width,
+                       field.height, n);
+        for (GLsizei l = 0; l < n; ++l) {
+            const DepthField& c = *scene.cone[size_t(l)];
+            auto put = [&](GLenum type, const auto& rg) {
+                glTexSubImage3D(GL_TEXTURE_2D_ARRAY, 0, 0, 0, l, field.width,
+                                field.height, 1, GL_RG, type, rg.data());
+            };
+            if (r8)
+                put(GL_UNSIGNED_BYTE, interleave(field.depth8, c.depth8));
+            else
+                put(GL_FLOAT, interleave(field.depth, c.depth));
+        }
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, filter);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, filter);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, wrap);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, wrap);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_BASE_LEVEL, 0);
+        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAX_LEVEL, 0);
+        if (scene.sampler.filter == Filter::Min4)
+            glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_REDUCTION_MODE_ARB, GL_MIN);
+        glActiveTexture(GL_TEXTURE0);
+    }
 
     // Targets: two RGBA32F colour attachments, no depth buffer (the plane's two triangles
     // do not overlap, so the C++ depth test removes nothing).
@@ -404,6 +449,7 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     glUniform2f(loc("uOrthoDirUv"), u.orthoDu, u.orthoDv);
     glUniform1f(loc("uOrthoViewZ"), u.orthoViewZ);
     glUniform1i(loc("uHeights"), 0);
+    glUniform1i(loc("uConeLayers"), 1);
     glUniform1i(loc("uConeSquared"), scene.coneSquared ? 1 : 0);
     UploadKernelUniforms(m.program, scene.kernel);
 

@@ -41,9 +41,10 @@ struct GlScene {
     TextureFormat format = TextureFormat::R32F;
     Kernel kernel;  ///< the configured kernel whose twin runs
     /// The cone kernels' ratio channel (Textures::cone), uploaded with the depth as one
-    /// RG texture (RG32F, or RG8 of the codes for R8); required when the kernel reads
-    /// a map.
-    std::shared_ptr<const DepthField> cone;
+    /// RG texture (RG32F, or RG8 of the codes for R8); a layered channel (the
+    /// directional kernels) as an RG texture array of (depth, layer's ratio) next to a
+    /// plain height texture. Required when the kernel reads a map.
+    std::vector<std::shared_ptr<const DepthField>> cone;
     bool coneSquared = false;
     bool measureLanes = true;  ///< count executed loop trips per lane group (slower)
     int traceX = -1,

@@ -35,6 +35,27 @@
 // listing: a pixel costs exactly cone_steps + refine_steps fetches. early_exit = 1 ends
 // the relaxed loop at the first point inside (the binary search then starts there).
 // `hit` is whether the relaxed loop reached a point inside.
+//
+// qcsm, acm4, acm8 (directional cones: QDCSM in 001 §18.1 and 004 §4.3.2; ACM in 000
+// §II-B): csm's step with the ratio "indexed by the viewing direction" (000 §II-B). The
+// maps hold one ratio per direction class (maps/cone_map.h: quad = the half planes +x,
+// -x, +y, -y; acm4 / acm8 = closed 90° / 45° sectors counter-clockwise from +u, in uv
+// space). Every ray point after the current one lies along dirUv from it, so a cone that
+// is empty over the direction class containing dirUv bounds the step. The class is
+// picked per ray in Begin by exact sign comparisons of (du, dv) (no atan2: the GLSL twin
+// makes the same choice bit for bit), and the kernel reads that layer of a layered map
+// (render/kernel_maps.cpp KernelConeLayers):
+//   acm4 / acm8: the lowest-numbered closed sector containing dirUv (layer = sector).
+//   qcsm: the open half planes containing dirUv: both of a quadrant when du, dv != 0
+//     (layers 0..3 hold max(+x, +y), max(-x, +y), max(-x, -y), max(+x, -y): either
+//     half-plane cone is empty along the ray, so the wider one bounds it), one when the
+//     ray is axis-aligned (layers 4..7: +x, +y, -x, -y). A vertical ray (dirUv = 0)
+//     reads layer 4; its step is D - t for any ratio > 0.
+// One fetch per trip returns the depth and the ray's ratio, as for csm (one layered
+// texture of (depth, ratio) pairs, texture(sampler2DArray, (uv, layer)) on the twin).
+// The papers' storage (000 §II-D: ratios in RGBA, acm8 as two RGBA halves, the depth
+// elsewhere) costs two (acm8: three) texture calls per trip; docs/methods/acm4.md says
+// how to convert.
 #pragma once
 
 #include <array>
@@ -62,10 +83,13 @@ inline constexpr ParamSpec kConeStepForm = {
 inline constexpr std::array<std::string_view, 1> kConeMaps = {"cone"};
 inline constexpr std::array<std::string_view, 1> kRelaxedMaps = {"relaxed"};
 
-template <bool kRelaxed>
+/// The cone kernels of one source: the step is csm's, the map and its reading differ.
+enum class ConeFamily { Conservative, Relaxed, Quad, Acm4, Acm8 };
+
+template <ConeFamily kF>
 struct ConeStepPreset;
 template <>
-struct ConeStepPreset<false> {
+struct ConeStepPreset<ConeFamily::Conservative> {
     static constexpr std::string_view kName = "csm", kTitle = "cone step mapping",
                                       kSource =
                                           "Burger 2018 (004) Alg. 4; Dummer 2006; Chen & "
@@ -84,7 +108,7 @@ inline constexpr ParamSpec kEarlyExitFixed = {
     "1: leave the cone loop at the first point inside; 0: fixed loops as Listing 18-3",
     "uEarlyExit"};
 template <>
-struct ConeStepPreset<true> {
+struct ConeStepPreset<ConeFamily::Relaxed> {
     static constexpr std::string_view
         kName = "rcs",
         kTitle = "relaxed cone stepping + binary search",
@@ -98,20 +122,103 @@ struct ConeStepPreset<true> {
     static constexpr auto& kMaps = kRelaxedMaps;
     static constexpr std::string_view kEncoding = "u8";  // GPU Gems 3: ratio in B, 8 bit
 };
+inline constexpr std::array<std::string_view, 1> kQuadMaps = {"quad"};
+inline constexpr std::array<std::string_view, 1> kAcm4Maps = {"acm4"};
+inline constexpr std::array<std::string_view, 1> kAcm8Maps = {"acm8"};
+inline constexpr std::array<ParamSpec, 4> kDirectionalParams = {
+    ConeSteps(15), kConeStepForm, kEarlyExitParam, kBudgetParam};
+template <>
+struct ConeStepPreset<ConeFamily::Quad> {
+    static constexpr std::string_view
+        kName = "qcsm",
+        kTitle = "quad-directional cone step mapping",
+        kSource = "Policarpo & Oliveira (001) §18.1 QDCSM; Burger 2018 (004) §4.3.2";
+    static constexpr auto& kParams = kDirectionalParams;
+    static constexpr auto& kMaps = kQuadMaps;
+    // 004 measures QCSM next to its CSM (Table 4.8), whose ratios are sqrt-encoded.
+    static constexpr std::string_view kEncoding = "u8sqrt";
+};
+template <>
+struct ConeStepPreset<ConeFamily::Acm4> {
+    static constexpr std::string_view kName = "acm4",
+                                      kTitle = "anisotropic cone mapping, 4 sectors",
+                                      kSource = "Chen & Chuang 2009 (000) §II-B, §II-D";
+    static constexpr auto& kParams = kDirectionalParams;
+    static constexpr auto& kMaps = kAcm4Maps;
+    static constexpr std::string_view kEncoding = "u8";  // 000 §II-D: an RGBA texture
+};
+template <>
+struct ConeStepPreset<ConeFamily::Acm8> {
+    static constexpr std::string_view kName = "acm8",
+                                      kTitle = "anisotropic cone mapping, 8 sectors",
+                                      kSource = "Chen & Chuang 2009 (000) §II-B, §II-D";
+    static constexpr auto& kParams = kDirectionalParams;
+    static constexpr auto& kMaps = kAcm8Maps;
+    static constexpr std::string_view kEncoding = "u8";  // 000 §II-D: two RGBA halves
+};
+
+/// Layers of the family's map as the kernel reads it.
+constexpr int ConeFamilyLayers(ConeFamily f) {
+    return f == ConeFamily::Quad   ? 8
+           : f == ConeFamily::Acm4 ? 4
+           : f == ConeFamily::Acm8 ? 8
+                                   : 1;
+}
+
+/// The layer a ray with direction (du, dv) reads (see the file comment). Exact
+/// comparisons only, in the order the twin makes them (kernels/glsl/cone_step.glsl).
+template <ConeFamily kF, class F>
+RS_INLINE F ConeLayerOf(const F& du, const F& dv) {
+    const F zero(0.0f);
+    auto pick = [](const auto& cond, float k, const F& rest) {
+        return Select(cond, F(k), rest);
+    };
+    if constexpr (kF == ConeFamily::Acm4) {
+        // Closed quadrant k holds dirUv when cross(a_k, v) >= 0 and cross(v, a_k+1) >= 0.
+        F layer(3.0f);
+        layer = pick((du <= zero) && (dv <= zero), 2.0f, layer);
+        layer = pick((du <= zero) && (dv >= zero), 1.0f, layer);
+        return pick((du >= zero) && (dv >= zero), 0.0f, layer);
+    } else if constexpr (kF == ConeFamily::Acm8) {
+        // Closed 45° sectors bounded by (1,0), (1,1), (0,1), (-1,1), ... (uv space).
+        F layer(7.0f);  // dv >= -du, dv <= 0
+        layer = pick((du >= zero) && (dv <= -du), 6.0f, layer);
+        layer = pick((du <= zero) && (du >= dv), 5.0f, layer);
+        layer = pick((dv <= zero) && (dv >= du), 4.0f, layer);
+        layer = pick((dv >= zero) && (-du >= dv), 3.0f, layer);
+        layer = pick((du <= zero) && (dv >= -du), 2.0f, layer);
+        layer = pick((du >= zero) && (dv >= du), 1.0f, layer);
+        return pick((dv >= zero) && (du >= dv), 0.0f, layer);
+    } else if constexpr (kF == ConeFamily::Quad) {
+        F layer(4.0f);  // +x, and the vertical ray
+        layer = pick((du == zero) && (dv < zero), 7.0f, layer);
+        layer = pick((du < zero) && (dv == zero), 6.0f, layer);
+        layer = pick((du == zero) && (dv > zero), 5.0f, layer);
+        layer = pick((du > zero) && (dv < zero), 3.0f, layer);
+        layer = pick((du < zero) && (dv < zero), 2.0f, layer);
+        layer = pick((du < zero) && (dv > zero), 1.0f, layer);
+        return pick((du > zero) && (dv > zero), 0.0f, layer);
+    } else {
+        return zero;
+    }
+}
 
 }  // namespace detail
 
-template <bool kRelaxed>
+template <detail::ConeFamily kFamily>
 struct ConeStep {
-    using Preset = detail::ConeStepPreset<kRelaxed>;
+    using Preset = detail::ConeStepPreset<kFamily>;
+    static constexpr bool kRelaxed = kFamily == detail::ConeFamily::Relaxed;
     static constexpr bool kReadsRatio = true;
-    static constexpr std::array<GlslConstant, 1> kGlslConstants = {
-        GlslConstant{"uRelaxed", kRelaxed ? 1 : 0}};
+    static constexpr int kConeLayers = detail::ConeFamilyLayers(kFamily);
+    static constexpr std::array<GlslConstant, 2> kGlslConstants = {
+        GlslConstant{"uRelaxed", kRelaxed ? 1 : 0},
+        GlslConstant{"uConeFamily", int(kFamily)}};
 
     static const KernelInfo& Info() {
-        static const KernelInfo info{Preset::kName,   Preset::kTitle,   Preset::kSource,
-                                     Preset::kParams, Preset::kMaps,    "cone_step.glsl",
-                                     kGlslConstants,  Preset::kEncoding};
+        static const KernelInfo info{Preset::kName,   Preset::kTitle,    Preset::kSource,
+                                     Preset::kParams, Preset::kMaps,     "cone_step.glsl",
+                                     kGlslConstants,  Preset::kEncoding, kConeLayers};
         return info;
     }
 
@@ -163,6 +270,9 @@ struct ConeStep {
         first.t = zero;
         first.u = ray.U(zero);
         first.v = ray.V(zero);
+        if constexpr (kConeLayers > 1)
+            first.layer = stdx::static_simd_cast<typename L::I>(
+                detail::ConeLayerOf<kFamily>(ray.du, ray.dv));
     }
 
     /// The cone step's depth advance from t over depth h with ratio r (>= 0 when t < h).
@@ -253,7 +363,10 @@ struct ConeStep {
     }
 };
 
-using CsmKernel = ConeStep<false>;
-using RcsKernel = ConeStep<true>;
+using CsmKernel = ConeStep<detail::ConeFamily::Conservative>;
+using RcsKernel = ConeStep<detail::ConeFamily::Relaxed>;
+using QcsmKernel = ConeStep<detail::ConeFamily::Quad>;
+using Acm4Kernel = ConeStep<detail::ConeFamily::Acm4>;
+using Acm8Kernel = ConeStep<detail::ConeFamily::Acm8>;
 
 }  // namespace reliefsim

@@ -22,7 +22,9 @@
 // must answer from State what the lane returns if it stopped there. The GLSL twin is the
 // same step in a do-while loop (kernels/glsl/). A kernel with `static constexpr bool
 // kReadsRatio = true` reads a cone-family map: each of its fetches returns the depth and
-// the decoded cone ratio at the same uv (one fetch of the combined texture).
+// the decoded cone ratio at the same uv (one fetch of the combined texture); one with
+// `kConeLayers = n` reads an n-layer map and names the layer of each lane in Begin
+// (Fetch::layer).
 #pragma once
 
 #include <cstdint>
@@ -91,6 +93,9 @@ struct KernelInfo {
     /// How its maps are stored by default (a kConeEncodingNames name: as its paper
     /// stores them); "" when it reads none.
     std::string_view mapEncoding = "";
+    /// Layers of its map as it reads it (kConeLayers: one per direction class of the
+    /// directional cones; 1 otherwise).
+    int mapLayers = 1;
 };
 
 /// Parameter values by name: every parameter of the method, defaults filled in.
@@ -143,11 +148,24 @@ concept KernelReadsRatio = requires {
     requires K::kReadsRatio;
 };
 
-/// Where each lane fetches next: uv, and the ray depth there (for traces).
+/// Where each lane fetches next: uv, and the ray depth there (for traces). `layer` picks
+/// the cone map's layer for kernels whose map has several (kConeLayers > 1: the
+/// directional cones, one layer per ray direction class); the driver keeps it from Begin
+/// on, kernels with one layer leave it 0.
 template <class L>
 struct Fetch {
     typename L::F u, v, t;
+    typename L::I layer = typename L::I(0);
 };
+
+/// The number of cone-map layers kernel K reads (kConeLayers, else 1).
+template <class K>
+constexpr int KernelConeLayers() {
+    if constexpr (requires { K::kConeLayers; })
+        return K::kConeLayers;
+    else
+        return 1;
+}
 
 /// What a kernel reports per lane when the driver is done with it.
 template <class L>

@@ -25,9 +25,9 @@ struct KernelList {
 };
 
 /// Every kernel, in catalogue order (the order of `reliefsim methods`).
-using KernelTypes =
-    KernelList<ParallaxKernel, OffsetLimitKernel, LinearKernel, ReliefKernel,
-               SecantKernel, IntervalKernel, PomKernel, CsmKernel, RcsKernel>;
+using KernelTypes = KernelList<ParallaxKernel, OffsetLimitKernel, LinearKernel,
+                               ReliefKernel, SecantKernel, IntervalKernel, PomKernel,
+                               CsmKernel, RcsKernel, QcsmKernel, Acm4Kernel, Acm8Kernel>;
 
 using MethodInfo = KernelInfo;
 using ParamDef = ParamSpec;

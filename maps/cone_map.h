@@ -215,9 +215,10 @@ void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc,
 /// Loads a cone map made elsewhere (e.g. GPU Gems 3 "*_cone.tga": ratio linear in B, 8
 /// bit). channel: 0..3 = R,G,B,A; -1 = all four (Quad: R,G,B,A = +x,-x,+y,-y). The size
 /// must equal (expectWidth, expectHeight) when they are > 0. Throws Error naming the
-/// file.
+/// file after `option` (the command-line flag that named it).
 ConeMap LoadExternalConeMap(const std::string& path, ConeKind kind, int channel,
-                            int expectWidth = 0, int expectHeight = 0);
+                            int expectWidth = 0, int expectHeight = 0,
+                            const std::string& option = "--external");
 
 /// The dynamic-map demo of 000 (water): a sum of four travelling sinusoids at time t
 /// (seconds), depth in [0.05, 0.95], periodic in u and v. Regenerated every frame by

@@ -65,8 +65,9 @@ void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc,
 }
 
 ConeMap LoadExternalConeMap(const std::string& path, ConeKind kind, int channel,
-                            int expectWidth, int expectHeight) {
-    const std::string subject = "--external \"" + path + "\"";
+                            int expectWidth, int expectHeight,
+                            const std::string& option) {
+    const std::string subject = option + " \"" + path + "\"";
     const int want = channel < 0 ? 4 : 1;
     auto pick = [&](int nc) -> std::pair<int, int> {
         if ((channel < 0 && nc < 4) || channel >= nc)

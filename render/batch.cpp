@@ -142,12 +142,13 @@ BatchJob MakeBatchJob(const Kernel& kernel, const Textures& textures,
     job.textures = textures;
     if (!job.textures.padded)
         job.textures.padded = BindTextures(*textures.depth, textures.sampler).padded;
-    if (!kernel.Info().maps.empty() && !job.textures.cone)
-        throw Error("--method " + std::string(kernel.Info().name) +
-                    ": reads a cone map and none is bound (render/kernel_maps.h "
-                    "BindKernelTextures makes it)");
-    if (job.textures.cone && !job.textures.conePadded)
-        BindConeChannel(job.textures, *job.textures.cone, job.textures.coneSquared);
+    const KernelInfo& info = kernel.Info();
+    if (!info.maps.empty() && job.textures.cone.size() != size_t(info.mapLayers))
+        throw Error("--method " + std::string(info.name) + ": reads a cone map of " +
+                    std::to_string(info.mapLayers) + " layer(s) and " +
+                    std::to_string(job.textures.cone.size()) +
+                    " are bound (render/kernel_maps.h BindKernelTextures makes it)");
+    RS_CHECK(job.textures.cone.empty() || job.textures.conePadded);
     return job;
 }
 

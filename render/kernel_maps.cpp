@@ -1,6 +1,8 @@
 // The kernels' derived maps (render/kernel_maps.h).
 #include "render/kernel_maps.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 
@@ -41,15 +43,40 @@ void ValidateKernelMaps(const Kernel& kernel, const SamplerState& sampler,
     const ConeEncoding e = KernelMapEncoding(kernel, maps);
     const bool eightBit = e == ConeEncoding::U8 || e == ConeEncoding::U8Sqrt;
     if (sampler.precision == Precision::Llvmpipe8 && !eightBit)
-        throw Error("--cone-encoding " + std::string(ToString(e)) +
+        throw Error(std::string(maps.coneMap.empty() ? "--cone-encoding "
+                                                     : "--cone-map-encoding ") +
+                    std::string(ToString(e)) +
                     ": an 8-bit height texture (--texture-format r8) holds the cone "
                     "ratio in 8 bits too; use u8 or u8sqrt");
 }
 
-DepthField KernelConeChannel(const DepthField& field, const Kernel& kernel,
-                             const KernelMapSettings& maps, bool* cacheHit) {
-    const ConeKind kind = KernelConeKind(kernel);
-    const ConeEncoding enc = KernelMapEncoding(kernel, maps);
+namespace {
+
+/// The channels each layer takes the maximum over (kernels/cone_step.h): one layer per
+/// channel, except quad, whose layers are the direction classes of qcsm.
+std::vector<std::vector<int>> LayerChannels(ConeKind kind, int channels) {
+    if (kind == ConeKind::Quad)  // channels +x, -x, +y, -y
+        return {{0, 2}, {1, 2}, {1, 3}, {0, 3}, {0}, {2}, {1}, {3}};
+    std::vector<std::vector<int>> layers;
+    for (int c = 0; c < channels; ++c) layers.push_back({c});
+    return layers;
+}
+
+}  // namespace
+
+namespace {
+
+/// The map's texels as the texture stores them, per texel and channel: `stored` the
+/// texture's value (the ratio for float, code / 255 for 8-bit, code / 65535 for u16)
+/// and, for the 8-bit encodings, the codes.
+struct StoredMap {
+    int channels = 1;
+    std::vector<float> stored;
+    std::vector<uint8_t> codes8;
+};
+
+StoredMap GeneratedMap(const DepthField& field, ConeKind kind, ConeEncoding enc,
+                       const KernelMapSettings& maps, bool* cacheHit) {
     const ConeMapParams params;
     ConeMap map;
     bool hit = false;
@@ -67,31 +94,105 @@ DepthField KernelConeChannel(const DepthField& field, const Kernel& kernel,
         map = GenerateConeMap(field, kind, params);
     }
     if (cacheHit) *cacheHit = hit;
-    RS_CHECK(map.channels == 1 && map.width == field.width && map.height == field.height);
-    DepthField c;
-    c.width = field.width;
-    c.height = field.height;
-    c.name = field.name + " (" + std::string(ToString(kind)) + " " +
-             std::string(ToString(enc)) + ")";
+    RS_CHECK(map.width == field.width && map.height == field.height &&
+             map.channels == ChannelCount(kind, params));
+    StoredMap m;
+    m.channels = map.channels;
     if (enc == ConeEncoding::Float) {
-        c.depth = map.values;
-    } else {
-        c.depth.resize(map.values.size());
-        std::vector<uint16_t> codes;
-        QuantizeConeMap(map, enc, &codes);
-        RS_CHECK(codes.size() == map.values.size());
-        const bool eightBit = enc == ConeEncoding::U8 || enc == ConeEncoding::U8Sqrt;
-        if (eightBit) c.depth8.resize(codes.size());
-        for (size_t i = 0; i < codes.size(); ++i) {
-            if (eightBit) {
-                c.depth8[i] = uint8_t(codes[i]);
-                c.depth[i] = Unorm8ToFloat(uint8_t(codes[i]));  // the texture's value
-            } else {
-                c.depth[i] = float(codes[i]) * float(1.0 / 65535.0);
-            }
+        m.stored = std::move(map.values);
+        return m;
+    }
+    std::vector<uint16_t> codes;
+    QuantizeConeMap(map, enc, &codes);
+    RS_CHECK(codes.size() == map.values.size());
+    const bool eightBit = enc == ConeEncoding::U8 || enc == ConeEncoding::U8Sqrt;
+    m.stored.resize(codes.size());
+    if (eightBit) m.codes8.resize(codes.size());
+    for (size_t i = 0; i < codes.size(); ++i) {
+        if (eightBit) {
+            m.codes8[i] = uint8_t(codes[i]);
+            m.stored[i] = Unorm8ToFloat(uint8_t(codes[i]));  // the texture's value
+        } else {
+            m.stored[i] = float(codes[i]) * float(1.0 / 65535.0);
         }
     }
-    return c;
+    return m;
+}
+
+StoredMap ExternalMap(const DepthField& field, ConeKind kind, ConeEncoding enc,
+                      const KernelMapSettings& maps) {
+    const std::string subject = "--cone-map \"" + maps.coneMap + "\"";
+    const int need = ChannelCount(kind);
+    if (need != 1 && need != 4)
+        throw Error(subject + ": this method reads a " + std::to_string(need) +
+                    "-channel map (" + std::string(ToString(kind)) +
+                    "); external maps of 1 or 4 channels only");
+    ConeMap map = LoadExternalConeMap(maps.coneMap, kind,
+                                      need == 4 ? -1 : std::max(maps.coneMapChannel, 0),
+                                      field.width, field.height, "--cone-map");
+    RS_CHECK(map.channels == need);
+    StoredMap m;
+    m.channels = map.channels;
+    m.stored = std::move(map.values);
+    if (enc == ConeEncoding::U8 || enc == ConeEncoding::U8Sqrt) {
+        m.codes8.resize(m.stored.size());
+        for (size_t i = 0; i < m.stored.size(); ++i) {
+            const float v = m.stored[i];
+            const float c = std::nearbyint(v * 255.0f);
+            if (!(c >= 0.0f && c <= 255.0f) || Unorm8ToFloat(uint8_t(c)) != v)
+                throw Error(
+                    subject + ": texel (" +
+                    std::to_string(i / size_t(need) % size_t(field.width)) + ", " +
+                    std::to_string(i / size_t(need) / size_t(field.width)) +
+                    ") is not an 8-bit code; --cone-map-encoding " +
+                    std::string(ToString(enc)) + " needs an 8-bit map (or use float)");
+            m.codes8[i] = uint8_t(c);
+        }
+    }
+    return m;
+}
+
+}  // namespace
+
+std::vector<DepthField> KernelConeLayers(const DepthField& field, const Kernel& kernel,
+                                         const KernelMapSettings& maps, bool* cacheHit) {
+    const ConeKind kind = KernelConeKind(kernel);
+    const ConeEncoding enc = KernelMapEncoding(kernel, maps);
+    if (cacheHit) *cacheHit = false;
+    const StoredMap map = maps.coneMap.empty()
+                              ? GeneratedMap(field, kind, enc, maps, cacheHit)
+                              : ExternalMap(field, kind, enc, maps);
+    const size_t n = size_t(field.width) * size_t(field.height);
+    const size_t nc = size_t(map.channels);
+    RS_CHECK(map.stored.size() == n * nc &&
+             (map.codes8.empty() || map.codes8.size() == n * nc));
+    const auto layerChannels = LayerChannels(kind, map.channels);
+    std::vector<DepthField> layers;
+    for (size_t l = 0; l < layerChannels.size(); ++l) {
+        const std::vector<int>& chans = layerChannels[l];
+        DepthField c;
+        c.width = field.width;
+        c.height = field.height;
+        c.name = field.name + " (" + std::string(ToString(kind)) + " " +
+                 std::string(ToString(enc)) +
+                 (layerChannels.size() > 1 ? " layer " + std::to_string(l) : "") + ")";
+        c.depth.resize(n);
+        if (!map.codes8.empty()) c.depth8.resize(n);
+        for (size_t i = 0; i < n; ++i) {
+            // The widest of the layer's channels, on the stored value (every decode is
+            // monotone, so the stored maximum decodes to the ratios' maximum).
+            float r = map.stored[i * nc + size_t(chans[0])];
+            for (int ch : chans) r = std::max(r, map.stored[i * nc + size_t(ch)]);
+            c.depth[i] = r;
+            if (c.depth8.empty()) continue;
+            uint8_t code = map.codes8[i * nc + size_t(chans[0])];
+            for (int ch : chans) code = std::max(code, map.codes8[i * nc + size_t(ch)]);
+            c.depth8[i] = code;
+        }
+        layers.push_back(std::move(c));
+    }
+    RS_CHECK(int(layers.size()) == kernel.Info().mapLayers);
+    return layers;
 }
 
 Textures BindKernelTextures(const DepthField& field, const SamplerState& sampler,
@@ -102,7 +203,7 @@ Textures BindKernelTextures(const DepthField& field, const SamplerState& sampler
     if (kernel.Info().maps.empty()) return t;
     ValidateKernelMaps(kernel, sampler, maps);
     const bool squared = KernelMapEncoding(kernel, maps) == ConeEncoding::U8Sqrt;
-    BindConeChannel(t, KernelConeChannel(field, kernel, maps, cacheHit), squared);
+    BindConeChannel(t, KernelConeLayers(field, kernel, maps, cacheHit), squared);
     return t;
 }
 

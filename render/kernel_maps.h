@@ -6,6 +6,7 @@
 
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "kernels/registry.h"
 #include "maps/cone_map.h"
@@ -18,6 +19,12 @@ struct KernelMapSettings {
     std::optional<ConeEncoding> encoding;  ///< --cone-encoding; unset: the kernel's own
     std::string cacheDir;                  ///< --cache-dir; "": DefaultMapCacheDir()
     bool useCache = true;                  ///< --no-cache turns it off
+    /// --cone-map: a map made elsewhere, used instead of generating one. Its values are
+    /// the stored ratios in `encoding` (--cone-map-encoding; unset: the kernel's).
+    std::string coneMap;
+    /// --cone-map-channel for one-ratio kernels: 0..3 = R, G, B, A; -1 (unset): R.
+    /// Directional kernels read all four (RGBA, as maps --kind quad|acm4 writes them).
+    int coneMapChannel = -1;
 };
 
 /// $XDG_CACHE_HOME/reliefsim, else $HOME/.cache/reliefsim, else "" (no cache).
@@ -38,9 +45,12 @@ Textures BindKernelTextures(const DepthField& field, const SamplerState& sampler
                             const Kernel& kernel, const KernelMapSettings& maps,
                             bool* cacheHit = nullptr);
 
-/// The cone channel as BindKernelTextures binds it (the stored texel values; codes in
-/// depth8 for 8-bit encodings): what the GL runner uploads as the texture's G channel.
-DepthField KernelConeChannel(const DepthField& field, const Kernel& kernel,
-                             const KernelMapSettings& maps, bool* cacheHit = nullptr);
+/// The cone channel's layers as BindKernelTextures binds them (the stored texel values;
+/// codes in depth8 for 8-bit encodings): what the GL runner uploads as the texture's G
+/// channel. One layer per channel of the map, except quad: qcsm's eight direction
+/// classes (kernels/cone_step.h), each the maximum of the half-plane channels it takes.
+std::vector<DepthField> KernelConeLayers(const DepthField& field, const Kernel& kernel,
+                                         const KernelMapSettings& maps,
+                                         bool* cacheHit = nullptr);
 
 }  // namespace reliefsim

@@ -127,8 +127,8 @@ RS_INLINE void TripPack(const typename K::Params& params, const BatchJob& job,
     using M = typename L::M;
     Sample<L> sampled;
     if constexpr (KernelReadsRatio<K>)
-        sampled.h = SampleHeightConeLanes<L>(tex, p.fetch.u, p.fetch.v, p.active,
-                                             p.texels, sampled.ratio);
+        sampled.h = SampleHeightConeLanes<L>(tex, p.fetch.u, p.fetch.v, p.fetch.layer,
+                                             p.active, p.texels, sampled.ratio);
     else
         sampled.h = SampleHeightLanes<L>(tex, p.fetch.u, p.fetch.v, p.active, p.texels);
     Assign(p.active, p.fetches, p.fetches + F(1.0f));

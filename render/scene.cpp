@@ -70,6 +70,16 @@ void ValidateSettings(const RenderSettings& s) {
         const Kernel kernel = MakeKernel(info, ResolveParams(info, s.set));
         ValidateKernelMaps(kernel, s.sampler, s.maps);
     }
+    if (!s.maps.coneMap.empty()) {
+        if (s.method == kExactMethod || FindMethod(s.method).maps.empty())
+            bad("--cone-map: method " + s.method + " reads no cone map");
+        const KernelInfo& info = FindMethod(s.method);
+        const auto kind = ParseConeKind(info.maps[0]);
+        if (kind && ChannelCount(*kind) != 1 && s.maps.coneMapChannel >= 0)
+            bad("--cone-map-channel: method " + s.method + " reads all four channels (" +
+                std::string(info.maps[0]) + " map: RGBA)");
+    }
+    if (s.maps.coneMapChannel > 3) bad("--cone-map-channel: must be R, G, B or A");
     if (s.maps.encoding &&
         (s.method == kExactMethod || FindMethod(s.method).maps.empty()))
         bad("--cone-encoding: method " + s.method + " reads no cone map");

@@ -220,7 +220,12 @@ ImageData ReadImageFile(const std::string& path, const std::string& subject,
                      subject);
     OIIO::Filesystem::IOMemReader proxy(file.Data(), file.Size());
     StderrCapture capture;
-    auto in = OIIO::ImageInput::open(path, nullptr, &proxy);
+    // Texel values as stored: OIIO would otherwise premultiply colour by alpha on read
+    // (PNG, TGA), which a texture upload never does, and the maps of GPU Gems 3 keep the
+    // depth in A next to ratios in B.
+    OIIO::ImageSpec config;
+    config.attribute("oiio:UnassociatedAlpha", 1);
+    auto in = OIIO::ImageInput::open(path, &config, &proxy);
     if (!in) {
         std::string err = OIIO::geterror();
         const std::string printed = capture.Finish();
@@ -388,6 +393,9 @@ void WriteImage(const std::string& path, OIIO::ImageSpec spec, OIIO::TypeDesc ty
     // EXR and TIFF writers stamp the current time unless DateTime is set; an empty value
     // writes none, so equal pixels give byte-identical files.
     spec.attribute("DateTime", "");
+    // Values as given: without this, a PNG writer divides colour by alpha (it takes the
+    // pixels for premultiplied), which would change a 4-channel map's ratios.
+    spec.attribute("oiio:UnassociatedAlpha", 1);
     OutputSet own;
     OutputSet& set = outputs ? *outputs : own;
     const std::string temp = set.Add(path);

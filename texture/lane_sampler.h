@@ -31,14 +31,20 @@ struct Textures {
     /// The cone kernels' ratio channel (kernels/kernel.h kReadsRatio), texel for texel
     /// with `depth`: the stored ratio as the texture holds it (float, or code / 255 with
     /// the codes in depth8 for 8-bit maps), sampled with the same footprint and weights
-    /// as the depth in the same fetch. Null for kernels that read no cone map.
-    std::shared_ptr<const DepthField> cone;
+    /// as the depth in the same fetch. One layer per direction class for the
+    /// directional kernels (kConeLayers), else one. Empty for kernels that read no map.
+    std::vector<std::shared_ptr<const DepthField>> cone;
+    /// Every layer's padded texels, layer k at k * (one layer's count).
     std::shared_ptr<const PaddedTexels> conePadded;
+    /// Every layer's 8-bit codes, layer k at k * width * height (8-bit maps only).
+    std::shared_ptr<const std::vector<uint8_t>> cone8;
     bool coneSquared = false;  ///< the ratio is stored as sqrt(r): square after sampling
 };
 
-/// Adds the ratio channel `cone` (same size as the depth) to `t`, padded for its wrap.
-void BindConeChannel(Textures& t, DepthField cone, bool squared);
+/// Binds the ratio channel `layers` (each the depth's size; at least one) to `t`, padded
+/// for its wrap. Throws Error when the layers' texels cannot be addressed with 32-bit
+/// lane indices.
+void BindConeChannel(Textures& t, std::vector<DepthField> layers, bool squared);
 
 /// Textures for `field` sampled with `state`, with the padded texels the lanes read.
 inline Textures BindTextures(const DepthField& field, SamplerState state) {
@@ -62,9 +68,13 @@ struct LaneTextures {
     int width = 0, height = 0;  ///< of the field
     int stride = 0;             ///< of the padded texels
     bool pow2W = false, pow2H = false;
-    const DepthField* coneField = nullptr;  ///< the ratio channel (Textures::cone)
-    const float* conePadded = nullptr;      ///< its padded texels (layout of `padded`)
-    const uint8_t* cone8 = nullptr;         ///< its 8-bit codes (with depth8)
+    /// The ratio channel's layers (Textures::cone), for the scalar path.
+    const std::shared_ptr<const DepthField>* coneField = nullptr;
+    int coneLayers = 0;
+    const float* conePadded = nullptr;  ///< its padded texels (layout of `padded`)
+    int64_t conePaddedCount = 0;        ///< all layers
+    const uint8_t* cone8 = nullptr;     ///< its 8-bit codes (with depth8)
+    int64_t cone8Count = 0;             ///< all layers
     bool coneSquared = false;
 };
 
@@ -88,17 +98,23 @@ inline LaneTextures BindLanes(const Textures& t) {
         b.paddedCount = t.padded->Count();
         b.stride = t.padded->stride;
     }
-    if (t.cone) {
-        RS_CHECK(t.cone->width == b.width && t.cone->height == b.height);
-        b.coneField = t.cone.get();
+    if (!t.cone.empty()) {
+        for (const auto& layer : t.cone)
+            RS_CHECK(layer && layer->width == b.width && layer->height == b.height);
+        b.coneField = t.cone.data();
+        b.coneLayers = int(t.cone.size());
         b.coneSquared = t.coneSquared;
         if (b.depth8) {
-            RS_CHECK(t.cone->depth8.size() == t.depth->depth8.size());
-            b.cone8 = t.cone->depth8.data();
+            RS_CHECK(t.cone8 &&
+                     t.cone8->size() == t.cone.size() * t.depth->depth8.size());
+            b.cone8 = t.cone8->data();
+            b.cone8Count = int64_t(t.cone8->size());
         } else if (b.padded) {
             RS_CHECK(t.conePadded && t.conePadded->stride == b.stride &&
-                     t.conePadded->wrap == t.sampler.wrap);
+                     t.conePadded->wrap == t.sampler.wrap &&
+                     t.conePadded->Count() == int64_t(t.cone.size()) * b.paddedCount);
             b.conePadded = t.conePadded->texels.data();
+            b.conePaddedCount = t.conePadded->Count();
         }
     }
     return b;
@@ -385,14 +401,15 @@ RS_INLINE typename L::F SampleHeightLanes(const LaneTextures& tex, const typenam
 }
 
 /// One fetch per active lane of the cone kernels' combined texture: returns the depth
-/// (SampleHeightLanes exactly) and sets `ratio` to the ratio channel sampled with the
-/// same coordinates, footprint and weights (an RG texture on the GL side), squared when
-/// the map stores sqrt(r). One footprint of texels is read per fetch, as for the depth
-/// alone.
+/// (SampleHeightLanes exactly) and sets `ratio` to the ratio channel of each lane's
+/// `layer` sampled with the same coordinates, footprint and weights (an RG texture, or
+/// an RG texture array, on the GL side), squared when the map stores sqrt(r). One
+/// footprint of texels is read per fetch, as for the depth alone.
 template <class L>
 RS_INLINE typename L::F SampleHeightConeLanes(
     const LaneTextures& tex, const typename L::F& u, const typename L::F& v,
-    const typename L::M& active, typename L::F& texelReads, typename L::F& ratio) {
+    const typename L::I& layer, const typename L::M& active, typename L::F& texelReads,
+    typename L::F& ratio) {
     using F = typename L::F;
     using I = typename L::I;
     const SamplerState& st = tex.sampler;
@@ -404,18 +421,17 @@ RS_INLINE typename L::F SampleHeightConeLanes(
         const I w(tex.width);
         const I i00 = t.i0 * w + s.i0, i10 = t.i0 * w + s.i1;
         const I i01 = t.i1 * w + s.i0, i11 = t.i1 * w + s.i1;
-        auto lerp2 = [&](const uint8_t* data) {
+        auto lerp2 = [&](const uint8_t* data, int64_t count, const I& off) {
             auto at = [&](const I& i) {
-                return detail::GatherLanes<I, L::kWidth>(data, size_t(tex.depth8Count),
-                                                         i);
+                return detail::GatherLanes<I, L::kWidth>(data, size_t(count), i + off);
             };
             const I r0 = detail::Lerp8Lanes(s.w, at(i00), at(i10));
             const I r1 = detail::Lerp8Lanes(s.w, at(i01), at(i11));
             return stdx::static_simd_cast<F>(detail::Lerp8Lanes(t.w, r0, r1)) *
                    F(float(1.0 / 255.0));
         };
-        h = lerp2(tex.depth8);
-        c = lerp2(tex.cone8);
+        h = lerp2(tex.depth8, tex.depth8Count, I(0));
+        c = lerp2(tex.cone8, tex.cone8Count, layer * I(int(tex.depth8Count)));
         Assign(active, texelReads, texelReads + F(4.0f));
     } else if (tex.padded) {
         if (st.filter == Filter::Nearest) {
@@ -424,8 +440,9 @@ RS_INLINE typename L::F SampleHeightConeLanes(
             const I at = j * I(tex.stride) + i;
             h = detail::GatherLanes<F, L::kWidth>(tex.padded, size_t(tex.paddedCount),
                                                   at);
-            c = detail::GatherLanes<F, L::kWidth>(tex.conePadded, size_t(tex.paddedCount),
-                                                  at);
+            c = detail::GatherLanes<F, L::kWidth>(tex.conePadded,
+                                                  size_t(tex.conePaddedCount),
+                                                  at + layer * I(int(tex.paddedCount)));
             Assign(active, texelReads, texelReads + F(1.0f));
         } else {
             auto s = detail::WrapLinearLanes<L>(u, tex.width, st.wrap, tex.pow2W);
@@ -433,8 +450,9 @@ RS_INLINE typename L::F SampleHeightConeLanes(
             const I base = t.i0 * I(tex.stride) + s.i0;
             const auto fh =
                 detail::LoadFootprint<L>(tex.padded, tex.paddedCount, tex.stride, base);
-            const auto fc = detail::LoadFootprint<L>(tex.conePadded, tex.paddedCount,
-                                                     tex.stride, base);
+            const auto fc =
+                detail::LoadFootprint<L>(tex.conePadded, tex.conePaddedCount, tex.stride,
+                                         base + layer * I(int(tex.paddedCount)));
             Assign(active, texelReads, texelReads + F(4.0f));
             if (st.filter == Filter::Min4) {
                 auto min4 = [&](const detail::Footprint<L>& f) {
@@ -464,7 +482,8 @@ RS_INLINE typename L::F SampleHeightConeLanes(
             FetchCounts counts;
             h[k] = SampleCounted(*tex.field, st, u[k], v[k], &counts);
             FetchCounts unused;
-            c[k] = SampleCounted(*tex.coneField, st, u[k], v[k], &unused);
+            RS_DCHECK(layer[k] >= 0 && layer[k] < tex.coneLayers);
+            c[k] = SampleCounted(*tex.coneField[layer[k]], st, u[k], v[k], &unused);
             texelReads[k] = texelReads[k] + float(counts.nTexelReads);
         }
     }

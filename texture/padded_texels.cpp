@@ -1,5 +1,9 @@
 #include "texture/padded_texels.h"
 
+#include <cstdint>
+#include <limits>
+#include <string>
+
 #include "core/error.h"
 #include "texture/lane_sampler.h"
 
@@ -23,10 +27,36 @@ PaddedTexels PadTexels(const DepthField& field, WrapMode wrap) {
     return p;
 }
 
-void BindConeChannel(Textures& t, DepthField cone, bool squared) {
-    RS_CHECK(t.depth && cone.width == t.depth->width && cone.height == t.depth->height);
-    t.conePadded = std::make_shared<const PaddedTexels>(PadTexels(cone, t.sampler.wrap));
-    t.cone = std::make_shared<const DepthField>(std::move(cone));
+void BindConeChannel(Textures& t, std::vector<DepthField> layers, bool squared) {
+    RS_CHECK(t.depth && !layers.empty());
+    const DepthField& d = *t.depth;
+    const int64_t n = int64_t(layers.size());
+    // The lanes address every layer's texels with 32-bit indices.
+    const int64_t padded = int64_t(d.width + 1) * int64_t(d.height + 1);
+    if (n * padded > int64_t(std::numeric_limits<int32_t>::max()))
+        throw Error("cone map of " + std::to_string(n) + " layers of " +
+                    std::to_string(d.width) + "x" + std::to_string(d.height) +
+                    ": too large for the lane sampler (" + std::to_string(n * padded) +
+                    " texels; at most 2^31 - 1)");
+    const bool eightBit = !layers[0].depth8.empty();
+    PaddedTexels all;
+    std::vector<uint8_t> codes;
+    t.cone.clear();
+    for (DepthField& layer : layers) {
+        RS_CHECK(layer.width == d.width && layer.height == d.height &&
+                 layer.depth8.empty() != eightBit);
+        PaddedTexels p = PadTexels(layer, t.sampler.wrap);
+        if (all.texels.empty()) {
+            all = p;
+        } else {
+            all.texels.insert(all.texels.end(), p.texels.begin(), p.texels.end());
+        }
+        if (eightBit) codes.insert(codes.end(), layer.depth8.begin(), layer.depth8.end());
+        t.cone.push_back(std::make_shared<const DepthField>(std::move(layer)));
+    }
+    t.conePadded = std::make_shared<const PaddedTexels>(std::move(all));
+    t.cone8 = eightBit ? std::make_shared<const std::vector<uint8_t>>(std::move(codes))
+                       : nullptr;
     t.coneSquared = squared;
 }
 

@@ -7,6 +7,40 @@ uniform int uConeSteps;     // cone steps
 uniform int uRefineSteps;   // binary steps (rcs)
 uniform int uConeStepForm;  // 0: Listing 18-3's step; 1: Alg. 4's unit-ray form
 uniform int uRelaxed;       // 1: rcs
+uniform int uConeFamily;    // kernels/cone_step.h ConeFamily: 2 qcsm, 3 acm4, 4 acm8
+
+const int kFamilyQuad = 2, kFamilyAcm4 = 3, kFamilyAcm8 = 4;
+
+// ConeLayerOf: the direction class of dirUv, by the same exact comparisons.
+int ConeLayerOf(float du, float dv) {
+    if (uConeFamily == kFamilyAcm4) {
+        if (du >= 0.0 && dv >= 0.0) return 0;
+        if (du <= 0.0 && dv >= 0.0) return 1;
+        if (du <= 0.0 && dv <= 0.0) return 2;
+        return 3;
+    }
+    if (uConeFamily == kFamilyAcm8) {
+        if (dv >= 0.0 && du >= dv) return 0;
+        if (du >= 0.0 && dv >= du) return 1;
+        if (du <= 0.0 && dv >= -du) return 2;
+        if (dv >= 0.0 && -du >= dv) return 3;
+        if (dv <= 0.0 && dv >= du) return 4;
+        if (du <= 0.0 && du >= dv) return 5;
+        if (du >= 0.0 && dv <= -du) return 6;
+        return 7;
+    }
+    if (uConeFamily == kFamilyQuad) {
+        if (du > 0.0 && dv > 0.0) return 0;
+        if (du < 0.0 && dv > 0.0) return 1;
+        if (du < 0.0 && dv < 0.0) return 2;
+        if (du > 0.0 && dv < 0.0) return 3;
+        if (du == 0.0 && dv > 0.0) return 5;
+        if (du < 0.0 && dv == 0.0) return 6;
+        if (du == 0.0 && dv < 0.0) return 7;
+        return 4;
+    }
+    return 0;
+}
 
 const int kConePhaseCone = 0, kConePhaseRefine = 1, kConePhaseDone = 2;
 
@@ -20,13 +54,16 @@ MarchResult March(MarchInput ray) {
     int nCoarse = 0, nRefine = 0;
     bool inside = false;
     int phase = kConePhaseCone;
+    int layer = ConeLayerOf(ray.dirUv.x, ray.dirUv.y);
+    bool layered = uConeFamily >= kFamilyQuad;
 
     gUsed = 0u;
     gExhausted = false;
     Take();  // the first fetch (a budget, when set, is >= 1)
     do {
         RS_ON_TRIP();
-        vec2 x = SampleHeightCone(At(ray, tq));
+        vec2 x = layered ? SampleHeightConeLayer(At(ray, tq), layer)
+                         : SampleHeightCone(At(ray, tq));
         precise float h = x.x;
         precise float r = x.y;
         RS_ON_SAMPLE(tq, At(ray, tq), h);

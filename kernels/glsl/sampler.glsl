@@ -19,3 +19,14 @@ vec2 SampleHeightCone(vec2 uv) {
     if (uConeSquared != 0) r = r * r;
     return vec2(x.r, r);
 }
+
+// The directional cone kernels' layered map: layer k holds (depth, ratio of direction
+// class k), one RG texture array sampled like uHeights (SampleHeightConeLanes' layer).
+uniform sampler2DArray uConeLayers;
+
+vec2 SampleHeightConeLayer(vec2 uv, int layer) {
+    vec4 x = textureLod(uConeLayers, vec3(uv, float(layer)), 0.0);
+    precise float r = x.g;
+    if (uConeSquared != 0) r = r * r;
+    return vec2(x.r, r);
+}

@@ -216,3 +216,115 @@ TEST(Cli, SweepWithABadConfigWritesNothing) {
     ExpectCleanFailure("sweep --config " + (d / "missing.json").string(), "no such file");
     ExpectCleanFailure("sweep --config " + d.string(), "not a regular file");
 }
+
+namespace {
+
+std::string ReadAll(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+}  // namespace
+
+TEST(Cli, ConeMapFromAFileRendersAsTheGeneratedOne) {
+    // A map written by `maps` (8-bit PNG, the kernel's own encoding) and read back with
+    // --cone-map gives the record the generated map gives, for a one-ratio kernel (csm:
+    // u8sqrt in R) and a directional one (acm4: four sectors in RGBA).
+    fs::path d = Scratch();
+    const std::string scene =
+        " --map builtin:shapes:64 --size 64x48 --no-reference --no-cache --quiet";
+    struct Case {
+        const char* method;
+        const char* kind;
+        const char* encoding;
+    };
+    for (const Case& c : {Case{"csm", "cone", "u8sqrt"}, Case{"acm4", "acm4", "u8"}}) {
+        const fs::path map = d / (std::string(c.kind) + ".png");
+        Result m = RunCli("maps --map builtin:shapes:64 --kind " + std::string(c.kind) +
+                              " --encoding " + c.encoding + " --out " + map.string(),
+                          d);
+        ASSERT_EQ(m.exitCode, 0) << m.err;
+        const fs::path gen = d / (std::string(c.method) + "_gen");
+        const fs::path ext = d / (std::string(c.method) + "_ext");
+        Result g = RunCli(
+            "render --method " + std::string(c.method) + scene + " --out " + gen.string(),
+            d);
+        ASSERT_EQ(g.exitCode, 0) << g.err;
+        Result e = RunCli("render --method " + std::string(c.method) + scene +
+                              " --cone-map " + map.string() + " --out " + ext.string(),
+                          d);
+        ASSERT_EQ(e.exitCode, 0) << e.err;
+        EXPECT_TRUE(ReadAll(gen / "record.exr") == ReadAll(ext / "record.exr"))
+            << c.method;
+        EXPECT_TRUE(ReadAll(gen / "fetches.png") == ReadAll(ext / "fetches.png"))
+            << c.method;
+        // The same file read as linear ratios is a different map: the record differs.
+        if (std::string(c.encoding) == "u8sqrt") {
+            const fs::path lin = d / "lin";
+            Result l =
+                RunCli("render --method csm" + scene + " --cone-map " + map.string() +
+                           " --cone-map-encoding u8 --out " + lin.string(),
+                       d);
+            ASSERT_EQ(l.exitCode, 0) << l.err;
+            EXPECT_FALSE(ReadAll(gen / "record.exr") == ReadAll(lin / "record.exr"));
+        }
+    }
+}
+
+TEST(Cli, BadConeMapsAreOneError) {
+    // The inputs live beside the scratch folder, which every ExpectCleanFailure renews.
+    const fs::path d = Scratch().parent_path() / "rs_cli_cone_map_inputs";
+    fs::remove_all(d);
+    fs::create_directories(d);
+    const fs::path small = d / "small.png";
+    ASSERT_EQ(RunCli("maps --map builtin:shapes:32 --kind cone --encoding u8 --out " +
+                         small.string(),
+                     d)
+                  .exitCode,
+              0);
+    const fs::path one = d / "one.png";
+    ASSERT_EQ(RunCli("maps --map builtin:shapes:64 --kind cone --encoding u8 --out " +
+                         one.string(),
+                     d)
+                  .exitCode,
+              0);
+    const fs::path flt = d / "cone.exr";
+    ASSERT_EQ(RunCli("maps --map builtin:shapes:64 --kind cone --encoding float --out " +
+                         flt.string(),
+                     d)
+                  .exitCode,
+              0);
+    const std::string base = "render --map builtin:shapes:64 --size 32x32 --quiet ";
+    ExpectCleanFailure(base + "--method csm --cone-map " + small.string(), "32x32");
+    ExpectCleanFailure(base + "--method csm --cone-map " + (d / "none.png").string(),
+                       "none.png");
+    ExpectCleanFailure(base + "--method csm --cone-map " + d.string(), "--cone-map");
+    ExpectCleanFailure(base + "--method relief --cone-map " + one.string(),
+                       "reads no cone map");
+    ExpectCleanFailure(base + "--method acm4 --cone-map " + one.string(), "channel");
+    ExpectCleanFailure(base + "--method acm8 --cone-map " + one.string(), "8-channel");
+    ExpectCleanFailure(
+        base + "--method csm --cone-map " + one.string() + " --cone-map-channel B",
+        "channel B");
+    ExpectCleanFailure(
+        base + "--method csm --cone-map " + one.string() + " --cone-map-channel Q",
+        "--cone-map-channel");
+    ExpectCleanFailure(
+        base + "--method acm4 --cone-map " + one.string() + " --cone-map-channel R",
+        "--cone-map-channel");
+    ExpectCleanFailure(base + "--method csm --cone-map-channel R", "--cone-map");
+    ExpectCleanFailure(base + "--method csm --cone-map-encoding u8", "--cone-map");
+    ExpectCleanFailure(
+        base + "--method csm --cone-map " + one.string() + " --cone-encoding u8",
+        "--cone-encoding");
+    ExpectCleanFailure(
+        base + "--method csm --cone-map " + one.string() + " --cone-map-encoding zz",
+        "--cone-map-encoding");
+    // Float ratios are not 8-bit codes.
+    ExpectCleanFailure(
+        base + "--method csm --cone-map " + flt.string() + " --cone-map-encoding u8",
+        "8-bit");
+    ExpectCleanFailure(base + "--method csm --texture-format r8 --cone-map " +
+                           flt.string() + " --cone-map-encoding float",
+                       "--cone-map-encoding float");
+}

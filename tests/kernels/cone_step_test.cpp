@@ -1,5 +1,6 @@
-// csm and rcs (kernels/cone_step.h): the closed form of cone steps over a flat plane,
-// Listing 18-3's exact fetch accounting, the bound maps, and their bad settings.
+// The cone kernels (kernels/cone_step.h): the closed form of cone steps over a flat
+// plane, Listing 18-3's exact fetch accounting, the directional kernels' choice of
+// layer against the generators' sectors, the bound maps, and their bad settings.
 #include <gtest/gtest.h>
 
 #include <bit>
@@ -7,6 +8,7 @@
 
 #include "core/error.h"
 #include "kernels/registry.h"
+#include "maps/cone_map_detail.h"
 #include "render/batch.h"
 #include "render/frame.h"
 #include "render/kernel_maps.h"
@@ -146,6 +148,120 @@ TEST(ConeKernels, DefaultEncodingsAreThePapers) {
         const KernelInfo& info = FindMethod(m);
         return KernelMapEncoding(MakeKernel(info, ResolveParams(info, {})), none);
     };
-    EXPECT_EQ(enc("csm"), ConeEncoding::U8Sqrt);  // Dummer, 004 Alg. 4
-    EXPECT_EQ(enc("rcs"), ConeEncoding::U8);      // GPU Gems 3
+    EXPECT_EQ(enc("csm"), ConeEncoding::U8Sqrt);   // Dummer, 004 Alg. 4
+    EXPECT_EQ(enc("rcs"), ConeEncoding::U8);       // GPU Gems 3
+    EXPECT_EQ(enc("qcsm"), ConeEncoding::U8Sqrt);  // 004 Table 4.8, beside its CSM
+    EXPECT_EQ(enc("acm4"), ConeEncoding::U8);      // 000 §II-D: RGBA texture
+    EXPECT_EQ(enc("acm8"), ConeEncoding::U8);
+}
+
+namespace {
+
+using L1 = Lanes<1>;
+
+template <detail::ConeFamily kF>
+int LayerOf(float du, float dv) {
+    return int(detail::ConeLayerOf<kF>(L1::F(du), L1::F(dv))[0]);
+}
+
+}  // namespace
+
+TEST(DirectionalCones, LayerIsASectorOfTheGeneratorThatHoldsTheRay) {
+    // acm4 / acm8: the layer the kernel reads must be a closed sector that the map
+    // generator (maps/cone_map.cpp SectorMask) puts the ray's direction in, for square
+    // and non-square maps (sectors are in uv space), including every sector boundary.
+    for (auto [w, h] : {std::pair{16, 16}, {32, 8}, {8, 24}}) {
+        const detail::Geometry g = detail::MakeGeometry(w, h);
+        for (int dy = -4; dy <= 4; ++dy)
+            for (int dx = -4; dx <= 4; ++dx) {
+                if (dx == 0 && dy == 0) continue;
+                const float du = float(dx) / float(w), dv = float(dy) / float(h);
+                const int l4 = LayerOf<detail::ConeFamily::Acm4>(du, dv);
+                const int l8 = LayerOf<detail::ConeFamily::Acm8>(du, dv);
+                ASSERT_TRUE(detail::SectorMask(ConeKind::Acm4, g, dx, dy) & (1u << l4))
+                    << w << "x" << h << " " << dx << "," << dy << " layer " << l4;
+                ASSERT_TRUE(detail::SectorMask(ConeKind::Acm8, g, dx, dy) & (1u << l8))
+                    << w << "x" << h << " " << dx << "," << dy << " layer " << l8;
+                // qcsm: the layer's half planes (its channels, render/kernel_maps.cpp)
+                // all hold the direction. Channels +x, -x, +y, -y = bits 1, 2, 4, 8.
+                static constexpr unsigned kHalfPlanes[8] = {1 | 4, 2 | 4, 2 | 8, 1 | 8,
+                                                            1,     4,     2,     8};
+                const unsigned quad = detail::SectorMask(ConeKind::Quad, g, dx, dy);
+                const int lq = LayerOf<detail::ConeFamily::Quad>(du, dv);
+                ASSERT_EQ(kHalfPlanes[lq] & quad, kHalfPlanes[lq])
+                    << dx << "," << dy << " layer " << lq;
+            }
+    }
+    // Boundaries take the lowest sector holding them.
+    EXPECT_EQ(LayerOf<detail::ConeFamily::Acm4>(0.0f, 1.0f), 0);
+    EXPECT_EQ(LayerOf<detail::ConeFamily::Acm4>(-1.0f, 0.0f), 1);
+    EXPECT_EQ(LayerOf<detail::ConeFamily::Acm8>(0.5f, 0.5f), 0);
+    EXPECT_EQ(LayerOf<detail::ConeFamily::Acm8>(0.0f, -0.5f), 5);
+    EXPECT_EQ(LayerOf<detail::ConeFamily::Quad>(0.0f, 0.0f), 4);  // vertical ray
+}
+
+TEST(DirectionalCones, FlatPlaneConvergesAsCsm) {
+    // Over a flat plane every sector is unbounded: every directional kernel steps as
+    // csm with the clamped ratio of its encoding (1 for u8 and u8sqrt), whatever the
+    // direction class. t_n = D (1 - (a / (a + 1))^n).
+    const DepthField f = Constant(0.5f);
+    for (const char* m : {"qcsm", "acm4", "acm8"})
+        for (glm::vec2 d :
+             {glm::vec2{0.3f, 0.4f}, glm::vec2{-0.4f, 0.3f}, glm::vec2{-0.3f, -0.4f},
+              glm::vec2{0.4f, -0.3f}, glm::vec2{0.5f, 0.0f}, glm::vec2{0.0f, -0.5f}}) {
+            const RayRun r =
+                RunCone(m, f, {{0.3f, 0.4f}, d, 1.0f}, {"cone_steps=5"}, NoCache());
+            const double q = 0.5 / (0.5 + 1.0);
+            EXPECT_NEAR(r.result.depthHit, 0.5 * (1.0 - std::pow(q, 5)), 1e-6)
+                << m << " " << d.x << "," << d.y;
+            EXPECT_EQ(r.counts.nFetches, 5u);
+        }
+}
+
+TEST(DirectionalCones, ReadTheRaysSectorOfTheMap) {
+    // A wall on one side only: texels x in [12, 20) are at depth 0 (the top), the rest
+    // at depth 1. From x = 4 the wall is 8 texels away in +u; in -u it is 17 texels
+    // away through the wrap, beyond the generators' half-width window (offsets in
+    // [-16, 16]), so no texel bounds the cones toward -u. Every directional kernel's
+    // cone toward -u is therefore wider than toward +u, and wider than csm's symmetric
+    // cone: the first step goes deeper.
+    DepthField f = Constant(1.0f, 32);
+    for (int j = 0; j < 32; ++j)
+        for (int i = 12; i < 20; ++i) f.depth[size_t(j) * 32 + size_t(i)] = 0.0f;
+    const MarchInput minus{{4.5f / 32.0f, 0.5f}, {-0.05f, 0.0f}, 1.0f};
+    const MarchInput plus{{4.5f / 32.0f, 0.5f}, {0.05f, 0.0f}, 1.0f};
+    const KernelMapSettings fl = NoCache(ConeEncoding::Float);
+    for (const char* m : {"qcsm", "acm4", "acm8"}) {
+        const RayRun a = RunCone(m, f, minus, {"cone_steps=1"}, fl);
+        const RayRun b = RunCone(m, f, plus, {"cone_steps=1"}, fl);
+        const RayRun c = RunCone("csm", f, minus, {"cone_steps=1"}, fl);
+        EXPECT_GT(a.result.depthHit, b.result.depthHit) << m;
+        EXPECT_GT(a.result.depthHit, c.result.depthHit) << m;
+        // Toward the wall the sector's cone is csm's (the wall is the nearest blocker).
+        EXPECT_EQ(b.result.depthHit, c.result.depthHit) << m;
+    }
+}
+
+TEST(DirectionalCones, FewerCoarseStepsThanCsmOnShapes) {
+    // 000 §II-B: wider (directional) cones converge in fewer steps. With early exit and
+    // enough steps, the average coarse iterations of acm4, acm8 and qcsm on
+    // builtin:shapes are below csm's (same encoding, so only the cones differ).
+    const DepthField f = MakeBuiltinMap("shapes", 128, 128);
+    auto avgCoarse = [&](const char* m) {
+        RenderSettings s;
+        s.method = m;
+        s.width = s.height = 96;
+        s.reference = false;
+        s.maps = NoCache(ConeEncoding::Float);
+        s.set = {"cone_steps=64"};
+        const RenderOutput out = Render(f, s);
+        double sum = 0;
+        size_t n = 0;
+        for (size_t i = 0; i < out.record.nCoarse.size(); ++i)
+            if (out.record.Covered(i)) sum += out.record.nCoarse[i], ++n;
+        return sum / double(n);
+    };
+    const double csm = avgCoarse("csm");
+    for (const char* m : {"qcsm", "acm4", "acm8"}) EXPECT_LT(avgCoarse(m), csm) << m;
+    EXPECT_LT(avgCoarse("acm8"), avgCoarse("acm4"));  // narrower sectors, wider cones
 }
