@@ -32,6 +32,7 @@ ReferenceSummary SummarizeAgainstReference(const FrameRecord& r,
         sumUv += uv;
         s.uvErrorTexelsMax = std::max(s.uvErrorTexelsMax, uv);
         s.missedGeometryPixels += ref.missed[i];
+        s.pastFirstHitPixels += PastFirstHit(double(r.hitDepth[i]), double(ref.depth[i]));
         for (size_t c = 0; c < 3; ++c) {
             const double d = double(color[3 * i + c]) - double(ref.rgb[3 * i + c]);
             sumColorSq += d * d;
@@ -42,6 +43,7 @@ ReferenceSummary SummarizeAgainstReference(const FrameRecord& r,
     s.mseExactDepth = sumSq / k;
     s.depthErrorMean = sum / k;
     s.uvErrorTexelsMean = sumUv / k;
+    s.pastFirstHitShare = double(s.pastFirstHitPixels) / k;
     const double mseColor = sumColorSq / (3 * k);
     s.psnrColor = mseColor > 0 ? 10.0 * std::log10(1.0 / mseColor)
                                : std::numeric_limits<double>::infinity();

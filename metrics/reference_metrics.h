@@ -30,6 +30,18 @@ inline bool MissedGeometry(double tHit, double tRef, double coarseStep,
     return tHit - tRef > coarseStep && leftBetween;
 }
 
+/// How far (in depth) a returned point may lie beyond the exact first hit and still count
+/// as not past it: a few float roundings of t in [0, 1] (the reference is stored as
+/// float).
+inline constexpr double kPastFirstHitTolerance = 1.0 / (1 << 20);
+
+/// Whether the kernel's returned depth tHit lies past the exact first hit tRef: the ray
+/// point it answers is beyond where the ray first met the surface (inside it, or behind a
+/// structure). A conservative search stops before the hit and never counts.
+inline bool PastFirstHit(double tHit, double tRef) {
+    return tHit - tRef > kPastFirstHitTolerance;
+}
+
 /// The distance between the kernel's hit uv and the reference's, in texels of a
 /// mapWidth x mapHeight map (both unwrapped along the same ray).
 inline double UvErrorTexels(double du, double dv, int mapWidth, int mapHeight) {
@@ -43,6 +55,8 @@ struct ReferenceSummary {
     double depthErrorMaxAbs = 0.0;  ///< largest |hit depth - reference depth|
     double uvErrorTexelsMean = 0.0, uvErrorTexelsMax = 0.0;
     uint64_t missedGeometryPixels = 0;
+    uint64_t pastFirstHitPixels = 0;  ///< covered pixels with PastFirstHit
+    double pastFirstHitShare = 0.0;   ///< of the covered pixels
     /// 10 log10(1 / MSE) of the shaded colour (RGB in [0, 1]) against the reference's
     /// shading, over covered pixels' channels; infinite when the colours are equal.
     double psnrColor = 0.0;

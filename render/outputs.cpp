@@ -103,6 +103,8 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
         j["uv_error_texels_mean"] = r.uvErrorTexelsMean;
         j["uv_error_texels_max"] = r.uvErrorTexelsMax;
         j["missed_geometry_pixels"] = r.missedGeometryPixels;
+        j["past_first_hit_pixels"] = r.pastFirstHitPixels;
+        j["past_first_hit_share"] = r.pastFirstHitShare;
         // Equal colours give an infinite PSNR, which JSON cannot hold: null.
         j["psnr_color"] = std::isfinite(r.psnrColor) ? nlohmann::json(r.psnrColor)
                                                      : nlohmann::json(nullptr);

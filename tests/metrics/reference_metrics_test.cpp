@@ -53,6 +53,9 @@ TEST(ReferenceMetrics, ErrorsOverCoveredPixelsOnly) {
     EXPECT_DOUBLE_EQ(s.uvErrorTexelsMax, 5.0);
     EXPECT_DOUBLE_EQ(s.uvErrorTexelsMean, 2.5);
     EXPECT_EQ(s.missedGeometryPixels, 1u);
+    // Pixel 0 answers a point past the first hit, pixel 1 one before it.
+    EXPECT_EQ(s.pastFirstHitPixels, 1u);
+    EXPECT_DOUBLE_EQ(s.pastFirstHitShare, 0.5);
     // One of six channels off by 0.5: MSE 0.25 / 6.
     EXPECT_NEAR(s.psnrColor, 10 * std::log10(6 / 0.25), 1e-12);
 }
@@ -116,4 +119,11 @@ TEST(LaneGroupMaps, CostAndUtilisationPerGroupAndTriangle) {
     EXPECT_EQ(m.utilisation[r.Index(8, 0)], 0.0f);
     EXPECT_EQ(m.totalCost, 32u * 10 + 32u * 8);
     EXPECT_THROW(LaneGroups(r, std::vector<int32_t>(3), 8, 4), Error);
+}
+
+TEST(ReferenceMetrics, PastFirstHitAllowsOnlyRounding) {
+    EXPECT_TRUE(PastFirstHit(0.5, 0.4));
+    EXPECT_FALSE(PastFirstHit(0.4, 0.5));         // short of the hit
+    EXPECT_FALSE(PastFirstHit(0.4 + 1e-7, 0.4));  // a float rounding of t
+    EXPECT_TRUE(PastFirstHit(0.4 + 4 * kPastFirstHitTolerance, 0.4));
 }

@@ -133,6 +133,7 @@ TEST(ReferencePass, EqualsTheExactFrame) {
             ASSERT_EQ(relief.reference.rgb[3 * i + c], exact.color[3 * i + c]);
     }
     EXPECT_EQ(exact.referenceSummary.missedGeometryPixels, 0u);
+    EXPECT_EQ(exact.referenceSummary.pastFirstHitPixels, 0u);
     EXPECT_EQ(exact.referenceSummary.mseExactDepth, 0.0);
 }
 
@@ -155,6 +156,18 @@ TEST(ReferencePass, MissedGeometryOnARidge) {
     const RenderOutput f = Render(flat, s);
     EXPECT_EQ(f.referenceSummary.missedGeometryPixels, 0u);
     EXPECT_GT(f.referenceSummary.depthErrorMean, 0.0);  // it overshoots by up to a step
+    // Over the plane at 0.4 two linear steps answer t = 0.5 (past the hit at 0.4) on
+    // every pixel; cone stepping only approaches the plane from above and never passes.
+    EXPECT_EQ(f.referenceSummary.pastFirstHitShare, 1.0);
+    RenderSettings c = Settings("csm");
+    c.maps.useCache = false;
+    c.maps.encoding = ConeEncoding::Float;
+    const RenderOutput cone = Render(flat, c);
+    EXPECT_EQ(cone.referenceSummary.pastFirstHitPixels, 0u);
+    // It reaches the plane (the float map's unbounded cones step almost all the way at
+    // once), from above.
+    EXPECT_GT(cone.referenceSummary.depthErrorMean, -1e-4);
+    EXPECT_LE(cone.referenceSummary.depthErrorMaxAbs, 1e-4);
 }
 
 // trace shows the pixel's errors against the reference as the frame's pass computed them.
