@@ -372,14 +372,18 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     const GLint filter = scene.sampler.filter == Filter::Nearest ? GL_NEAREST : GL_LINEAR;
     const GLint wrap =
         scene.sampler.wrap == WrapMode::Clamp ? GL_CLAMP_TO_EDGE : GL_REPEAT;
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, filter);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, filter);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, wrap);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, wrap);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, 0);
-    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
-    if (scene.sampler.filter == Filter::Min4)
-        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_REDUCTION_MODE_ARB, GL_MIN);
+    // Every texture is sampled alike: the scene's filter and wrap, one level.
+    auto setSampling = [&](GLenum target) {
+        glTexParameteri(target, GL_TEXTURE_MIN_FILTER, filter);
+        glTexParameteri(target, GL_TEXTURE_MAG_FILTER, filter);
+        glTexParameteri(target, GL_TEXTURE_WRAP_S, wrap);
+        glTexParameteri(target, GL_TEXTURE_WRAP_T, wrap);
+        glTexParameteri(target, GL_TEXTURE_BASE_LEVEL, 0);
+        glTexParameteri(target, GL_TEXTURE_MAX_LEVEL, 0);
+        if (scene.sampler.filter == Filter::Min4)
+            glTexParameteri(target, GL_TEXTURE_REDUCTION_MODE_ARB, GL_MIN);
+    };
+    setSampling(GL_TEXTURE_2D);
     if (layered) {
         // The directional kernels' layers: one RG (depth, ratio) layer per direction
         // class, on unit 1, sampled like the height texture.
@@ -401,14 +405,7 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
             else
                 put(GL_FLOAT, interleave(field.depth, c.depth));
         }
-        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, filter);
-        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, filter);
-        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_S, wrap);
-        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_WRAP_T, wrap);
-        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_BASE_LEVEL, 0);
-        glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAX_LEVEL, 0);
-        if (scene.sampler.filter == Filter::Min4)
-            glTexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_REDUCTION_MODE_ARB, GL_MIN);
+        setSampling(GL_TEXTURE_2D_ARRAY);
         glActiveTexture(GL_TEXTURE0);
     }
 

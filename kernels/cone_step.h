@@ -56,6 +56,23 @@
 // The papers' storage (000 §II-D: ratios in RGBA, acm8 as two RGBA halves, the depth
 // elsewhere) costs two (acm8: three) texture calls per trip; docs/methods/acm4.md says
 // how to convert.
+//
+// cns, rcns (cone normal stepping, 004 ch. 3): csm and rcs with the cone stored as the
+// z component n_z of the unit normal of its side (§3.1; maps --kind cone-normal, n_z =
+// r / sqrt(1 + r^2), so n_z = 1 is a cone of 180°, which csm's ratio cannot store). The
+// step is eq. 3.2, t = -h n_z / (n . d): the side's plane passes through the apex, the
+// ray point lies h = D - t above it, n = (-sqrt(1 - n_z^2) s, n_z) with s the unit
+// horizontal direction of the ray, and d the ray direction. With d = (dirUv, -1) per
+// unit of depth (z up) that is
+//   d = (D - t) n_z / (sqrt(1 - n_z^2) |dirUv| + n_z)        (cone_step = 0)
+// and along the unit direction rd as Alg. 4 (cone_step = 1)
+//   s = (D - t) n_z / (sqrt(1 - n_z^2) |rd_xy| + n_z rd_z),  d = s rd_z.
+// In exact arithmetic this is csm's step with r = n_z / sqrt(1 - n_z^2); the stored
+// value, its quantisation and its rounding differ. rcns reads the relaxed cones' n_z
+// (maps
+// --kind cone-normal --relaxed) and keeps rcs's binary search. The distance estimate
+// h n_z of eq. 3.1 is what the cone-normal soft shadows and AO read (not here: view rays
+// only).
 #pragma once
 
 #include <array>
@@ -84,7 +101,15 @@ inline constexpr std::array<std::string_view, 1> kConeMaps = {"cone"};
 inline constexpr std::array<std::string_view, 1> kRelaxedMaps = {"relaxed"};
 
 /// The cone kernels of one source: the step is csm's, the map and its reading differ.
-enum class ConeFamily { Conservative, Relaxed, Quad, Acm4, Acm8 };
+enum class ConeFamily {
+    Conservative,
+    Relaxed,
+    Quad,
+    Acm4,
+    Acm8,
+    ConeNormal,
+    RelaxedNormal
+};
 
 template <ConeFamily kF>
 struct ConeStepPreset;
@@ -157,6 +182,29 @@ struct ConeStepPreset<ConeFamily::Acm8> {
     static constexpr std::string_view kEncoding = "u8";  // 000 §II-D: two RGBA halves
 };
 
+inline constexpr std::array<std::string_view, 1> kConeNormalMaps = {"cone-normal"};
+inline constexpr std::array<std::string_view, 1> kRelaxedNormalMaps = {
+    "cone-normal --relaxed"};
+template <>
+struct ConeStepPreset<ConeFamily::ConeNormal> {
+    static constexpr std::string_view kName = "cns", kTitle = "cone normal stepping",
+                                      kSource = "Burger 2018 (004) §3.1-3.3, eq. 3.2";
+    static constexpr auto& kParams = kDirectionalParams;
+    static constexpr auto& kMaps = kConeNormalMaps;
+    // 004 does not say how n_z is stored; n_z is in [0, 1], stored linearly in 8 bits.
+    static constexpr std::string_view kEncoding = "u8";
+};
+template <>
+struct ConeStepPreset<ConeFamily::RelaxedNormal> {
+    static constexpr std::string_view
+        kName = "rcns",
+        kTitle = "relaxed cone normal stepping + binary search",
+        kSource = "Burger 2018 (004) §3.3 eq. 3.2, §4.3.4; GPU Gems 3 (001) Listing 18-3";
+    static constexpr auto& kParams = ConeStepPreset<ConeFamily::Relaxed>::kParams;
+    static constexpr auto& kMaps = kRelaxedNormalMaps;
+    static constexpr std::string_view kEncoding = "u8";
+};
+
 /// Layers of the family's map as the kernel reads it.
 constexpr int ConeFamilyLayers(ConeFamily f) {
     return f == ConeFamily::Quad   ? 8
@@ -208,7 +256,11 @@ RS_INLINE F ConeLayerOf(const F& du, const F& dv) {
 template <detail::ConeFamily kFamily>
 struct ConeStep {
     using Preset = detail::ConeStepPreset<kFamily>;
-    static constexpr bool kRelaxed = kFamily == detail::ConeFamily::Relaxed;
+    static constexpr bool kRelaxed = kFamily == detail::ConeFamily::Relaxed ||
+                                     kFamily == detail::ConeFamily::RelaxedNormal;
+    /// The map stores n_z of the cone side's normal (cns, rcns), not the ratio.
+    static constexpr bool kNormal = kFamily == detail::ConeFamily::ConeNormal ||
+                                    kFamily == detail::ConeFamily::RelaxedNormal;
     static constexpr bool kReadsRatio = true;
     static constexpr int kConeLayers = detail::ConeFamilyLayers(kFamily);
     static constexpr std::array<GlslConstant, 2> kGlslConstants = {
@@ -275,10 +327,19 @@ struct ConeStep {
                 detail::ConeLayerOf<kFamily>(ray.du, ray.dv));
     }
 
-    /// The cone step's depth advance from t over depth h with ratio r (>= 0 when t < h).
+    /// The cone step's depth advance from t over depth h with ratio r, or n_z for the
+    /// cone-normal kernels (>= 0 when t < h).
     template <class F>
     RS_INLINE static F Advance(const Params& p, const F& t, const F& h, const F& r,
                                const F& rayRatio, const F& rdXy, const F& rdZ) {
+        if constexpr (kNormal) {  // eq. 3.2; r is n_z here
+            const F nXy = stdx::sqrt(F(1.0f) - r * r);
+            if (p.unitRayForm) {
+                const F s = ((h - t) * r) / (nXy * rdXy + r * rdZ);
+                return s * rdZ;
+            }
+            return ((h - t) * r) / (nXy * rayRatio + r);
+        }
         if (p.unitRayForm) {
             const F s = (h - t) / (rdXy / r + rdZ);
             return s * rdZ;
@@ -368,5 +429,7 @@ using RcsKernel = ConeStep<detail::ConeFamily::Relaxed>;
 using QcsmKernel = ConeStep<detail::ConeFamily::Quad>;
 using Acm4Kernel = ConeStep<detail::ConeFamily::Acm4>;
 using Acm8Kernel = ConeStep<detail::ConeFamily::Acm8>;
+using CnsKernel = ConeStep<detail::ConeFamily::ConeNormal>;
+using RcnsKernel = ConeStep<detail::ConeFamily::RelaxedNormal>;
 
 }  // namespace reliefsim

@@ -25,9 +25,10 @@ struct KernelList {
 };
 
 /// Every kernel, in catalogue order (the order of `reliefsim methods`).
-using KernelTypes = KernelList<ParallaxKernel, OffsetLimitKernel, LinearKernel,
-                               ReliefKernel, SecantKernel, IntervalKernel, PomKernel,
-                               CsmKernel, RcsKernel, QcsmKernel, Acm4Kernel, Acm8Kernel>;
+using KernelTypes =
+    KernelList<ParallaxKernel, OffsetLimitKernel, LinearKernel, ReliefKernel,
+               SecantKernel, IntervalKernel, PomKernel, CsmKernel, RcsKernel, QcsmKernel,
+               Acm4Kernel, Acm8Kernel, CnsKernel, RcnsKernel>;
 
 using MethodInfo = KernelInfo;
 using ParamDef = ParamSpec;

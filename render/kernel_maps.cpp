@@ -21,15 +21,28 @@ std::string DefaultMapCacheDir() {
 
 namespace {
 
-ConeKind KernelConeKind(const Kernel& kernel) {
+KernelMapSpec KernelConeSpec(const Kernel& kernel) {
     const KernelInfo& info = kernel.Info();
     RS_CHECK(info.maps.size() == 1);
-    const auto kind = ParseConeKind(info.maps[0]);
-    RS_CHECK(kind.has_value());
-    return *kind;
+    const auto spec = ParseKernelMap(info.maps[0]);
+    RS_CHECK(spec.has_value());
+    return *spec;
 }
 
 }  // namespace
+
+std::optional<KernelMapSpec> ParseKernelMap(std::string_view name) {
+    constexpr std::string_view kRelaxedFlag = " --relaxed";
+    KernelMapSpec spec;
+    if (name.ends_with(kRelaxedFlag)) {
+        spec.params.relaxed = true;
+        name.remove_suffix(kRelaxedFlag.size());
+    }
+    const auto kind = ParseConeKind(name);
+    if (!kind) return std::nullopt;
+    spec.kind = *kind;
+    return spec;
+}
 
 ConeEncoding KernelMapEncoding(const Kernel& kernel, const KernelMapSettings& maps) {
     if (maps.encoding) return *maps.encoding;
@@ -75,9 +88,9 @@ struct StoredMap {
     std::vector<uint8_t> codes8;
 };
 
-StoredMap GeneratedMap(const DepthField& field, ConeKind kind, ConeEncoding enc,
+StoredMap GeneratedMap(const DepthField& field, ConeKind kind,
+                       const ConeMapParams& params, ConeEncoding enc,
                        const KernelMapSettings& maps, bool* cacheHit) {
-    const ConeMapParams params;
     ConeMap map;
     bool hit = false;
     const std::string dir = maps.cacheDir.empty() ? DefaultMapCacheDir() : maps.cacheDir;
@@ -156,12 +169,13 @@ StoredMap ExternalMap(const DepthField& field, ConeKind kind, ConeEncoding enc,
 
 std::vector<DepthField> KernelConeLayers(const DepthField& field, const Kernel& kernel,
                                          const KernelMapSettings& maps, bool* cacheHit) {
-    const ConeKind kind = KernelConeKind(kernel);
+    const KernelMapSpec spec = KernelConeSpec(kernel);
+    const ConeKind kind = spec.kind;
     const ConeEncoding enc = KernelMapEncoding(kernel, maps);
     if (cacheHit) *cacheHit = false;
-    const StoredMap map = maps.coneMap.empty()
-                              ? GeneratedMap(field, kind, enc, maps, cacheHit)
-                              : ExternalMap(field, kind, enc, maps);
+    const StoredMap map =
+        maps.coneMap.empty() ? GeneratedMap(field, kind, spec.params, enc, maps, cacheHit)
+                             : ExternalMap(field, kind, enc, maps);
     const size_t n = size_t(field.width) * size_t(field.height);
     const size_t nc = size_t(map.channels);
     RS_CHECK(map.stored.size() == n * nc &&

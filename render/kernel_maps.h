@@ -27,6 +27,14 @@ struct KernelMapSettings {
     int coneMapChannel = -1;
 };
 
+/// A map as a kernel names it (KernelInfo::maps): a `maps --kind` name, optionally with
+/// " --relaxed" (the cone-normal map of relaxed cones), as `reliefsim maps` makes it.
+struct KernelMapSpec {
+    ConeKind kind = ConeKind::Cone;
+    ConeMapParams params;
+};
+std::optional<KernelMapSpec> ParseKernelMap(std::string_view name);
+
 /// $XDG_CACHE_HOME/reliefsim, else $HOME/.cache/reliefsim, else "" (no cache).
 std::string DefaultMapCacheDir();
 

@@ -74,8 +74,8 @@ void ValidateSettings(const RenderSettings& s) {
         if (s.method == kExactMethod || FindMethod(s.method).maps.empty())
             bad("--cone-map: method " + s.method + " reads no cone map");
         const KernelInfo& info = FindMethod(s.method);
-        const auto kind = ParseConeKind(info.maps[0]);
-        if (kind && ChannelCount(*kind) != 1 && s.maps.coneMapChannel >= 0)
+        const auto spec = ParseKernelMap(info.maps[0]);
+        if (spec && ChannelCount(spec->kind) != 1 && s.maps.coneMapChannel >= 0)
             bad("--cone-map-channel: method " + s.method + " reads all four channels (" +
                 std::string(info.maps[0]) + " map: RGBA)");
     }

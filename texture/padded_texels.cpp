@@ -47,7 +47,8 @@ void BindConeChannel(Textures& t, std::vector<DepthField> layers, bool squared) 
                  layer.depth8.empty() != eightBit);
         PaddedTexels p = PadTexels(layer, t.sampler.wrap);
         if (all.texels.empty()) {
-            all = p;
+            all = std::move(p);
+            all.texels.reserve(all.texels.size() * size_t(n));
         } else {
             all.texels.insert(all.texels.end(), p.texels.begin(), p.texels.end());
         }

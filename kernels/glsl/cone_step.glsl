@@ -1,15 +1,17 @@
 // GLSL twin of kernels/cone_step.h: cone step mapping (004 Alg. 4) and, with uRelaxed,
 // relaxed cone stepping with its binary search (001 Listing 18-3). One fetch per trip of
 // the combined texture (depth in .r, cone ratio in .g; sampler.glsl SampleHeightCone),
-// the same float operations in the same order as the C++ kernel.
+// the same float operations in the same order as the C++ kernel. Families 5 and 6 (cns,
+// rcns) read n_z of the cone side's normal and step by 004 eq. 3.2.
 
 uniform int uConeSteps;     // cone steps
 uniform int uRefineSteps;   // binary steps (rcs)
 uniform int uConeStepForm;  // 0: Listing 18-3's step; 1: Alg. 4's unit-ray form
 uniform int uRelaxed;       // 1: rcs
-uniform int uConeFamily;    // kernels/cone_step.h ConeFamily: 2 qcsm, 3 acm4, 4 acm8
+uniform int uConeFamily;    // kernels/cone_step.h ConeFamily: 2 qcsm, 3 acm4, 4 acm8,
+                            // 5 cns, 6 rcns
 
-const int kFamilyQuad = 2, kFamilyAcm4 = 3, kFamilyAcm8 = 4;
+const int kFamilyQuad = 2, kFamilyAcm4 = 3, kFamilyAcm8 = 4, kFamilyConeNormal = 5;
 
 // ConeLayerOf: the direction class of dirUv, by the same exact comparisons.
 int ConeLayerOf(float du, float dv) {
@@ -55,7 +57,8 @@ MarchResult March(MarchInput ray) {
     bool inside = false;
     int phase = kConePhaseCone;
     int layer = ConeLayerOf(ray.dirUv.x, ray.dirUv.y);
-    bool layered = uConeFamily >= kFamilyQuad;
+    bool layered = uConeFamily >= kFamilyQuad && uConeFamily <= kFamilyAcm8;
+    bool normalForm = uConeFamily >= kFamilyConeNormal;
 
     gUsed = 0u;
     gExhausted = false;
@@ -73,7 +76,15 @@ MarchResult March(MarchInput ray) {
             bool isIn = t >= h;
             inside = inside || isIn;
             precise float d;
-            if (uConeStepForm != 0) {
+            if (normalForm) {  // eq. 3.2; r is n_z
+                precise float nXy = sqrt(1.0 - r * r);
+                if (uConeStepForm != 0) {
+                    precise float s = ((h - t) * r) / (nXy * rdXy + r * rdZ);
+                    d = s * rdZ;
+                } else {
+                    d = ((h - t) * r) / (nXy * rayRatio + r);
+                }
+            } else if (uConeStepForm != 0) {
                 precise float s = (h - t) / (rdXy / r + rdZ);
                 d = s * rdZ;
             } else {

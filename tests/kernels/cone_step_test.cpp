@@ -36,12 +36,13 @@ KernelMapSettings NoCache(std::optional<ConeEncoding> e = {}) {
 }
 
 RayRun RunCone(const char* method, const DepthField& f, const MarchInput& in,
-               const std::vector<std::string>& set, const KernelMapSettings& maps) {
+               const std::vector<std::string>& set, const KernelMapSettings& maps,
+               const SamplerState& sampler = {}) {
     const KernelInfo& info = FindMethod(method);
     const Kernel kernel = MakeKernel(info, ResolveParams(info, set));
     std::shared_ptr<const void> params;
     const BatchJob job =
-        MakeBatchJob(kernel, BindKernelTextures(f, {}, kernel, maps), params);
+        MakeBatchJob(kernel, BindKernelTextures(f, sampler, kernel, maps), params);
     return test::MarchEveryWidth(job, in);
 }
 
@@ -84,29 +85,32 @@ TEST(Csm, StopsAtTheFirstPointInside) {
 
 TEST(Rcs, ListingCostsConeStepsPlusBinaryStepsEverywhere) {
     // Listing 18-3 runs both loops for their full counts: every covered pixel costs
-    // exactly cone_steps + binary_steps fetches (15 + 6 by default).
-    RenderSettings s;
-    s.method = "rcs";
-    s.width = s.height = 48;
-    s.reference = false;
-    s.maps = NoCache();
-    const DepthField f = MakeBuiltinMap("shapes", 64, 64);
-    const RenderOutput out = Render(f, s);
-    size_t covered = 0;
-    for (size_t i = 0; i < out.record.nFetches.size(); ++i) {
-        if (!out.record.Covered(i)) continue;
-        ++covered;
-        ASSERT_EQ(out.record.nFetches[i], 21u) << i;
-        ASSERT_EQ(out.record.nCoarse[i], 15u);
-        ASSERT_EQ(out.record.nRefine[i], 6u);
-    }
-    EXPECT_GT(covered, 1000u);
-    s.set = {"cone_steps=4", "refine_steps=3"};
-    const RenderOutput small = Render(f, s);
-    for (size_t i = 0; i < small.record.nFetches.size(); ++i)
-        if (small.record.Covered(i)) {
-            ASSERT_EQ(small.record.nFetches[i], 7u);
+    // exactly cone_steps + binary_steps fetches (15 + 6 by default); rcns keeps them.
+    for (const char* method : {"rcs", "rcns"}) {
+        SCOPED_TRACE(method);
+        RenderSettings s;
+        s.method = method;
+        s.width = s.height = 48;
+        s.reference = false;
+        s.maps = NoCache();
+        const DepthField f = MakeBuiltinMap("shapes", 64, 64);
+        const RenderOutput out = Render(f, s);
+        size_t covered = 0;
+        for (size_t i = 0; i < out.record.nFetches.size(); ++i) {
+            if (!out.record.Covered(i)) continue;
+            ++covered;
+            ASSERT_EQ(out.record.nFetches[i], 21u) << i;
+            ASSERT_EQ(out.record.nCoarse[i], 15u);
+            ASSERT_EQ(out.record.nRefine[i], 6u);
         }
+        EXPECT_GT(covered, 1000u);
+        s.set = {"cone_steps=4", "refine_steps=3"};
+        const RenderOutput small = Render(f, s);
+        for (size_t i = 0; i < small.record.nFetches.size(); ++i)
+            if (small.record.Covered(i)) {
+                ASSERT_EQ(small.record.nFetches[i], 7u);
+            }
+    }
 }
 
 TEST(Rcs, BinarySearchConvergesOnAFlatPlane) {
@@ -153,6 +157,89 @@ TEST(ConeKernels, DefaultEncodingsAreThePapers) {
     EXPECT_EQ(enc("qcsm"), ConeEncoding::U8Sqrt);  // 004 Table 4.8, beside its CSM
     EXPECT_EQ(enc("acm4"), ConeEncoding::U8);      // 000 §II-D: RGBA texture
     EXPECT_EQ(enc("acm8"), ConeEncoding::U8);
+    EXPECT_EQ(enc("cns"), ConeEncoding::U8);  // n_z in [0, 1], linear (004 is silent)
+    EXPECT_EQ(enc("rcns"), ConeEncoding::U8);
+}
+
+TEST(Cns, FlatPlaneIsReachedInOneStep) {
+    // Over a flat plane nothing rises above any apex: the cone is 180° wide, n_z = 1
+    // (code 255 in u8, exactly 1), which csm's ratio cannot store (it clamps to 1, a
+    // 90° cone, and only approaches the plane). Eq. 3.2 with n_z = 1 steps by
+    // (D - t) / (0 |dirUv| + 1): straight to the plane, then the second fetch is inside.
+    const DepthField f = Constant(0.5f);
+    const MarchInput in{{0.3f, 0.4f}, {0.3f, 0.4f}, 1.0f};
+    for (const char* form : {"cone_step=0", "cone_step=1"}) {
+        const RayRun one = RunCone("cns", f, in, {"cone_steps=1", form}, NoCache());
+        EXPECT_EQ(one.result.depthHit, 0.5f) << form;
+        EXPECT_FALSE(one.result.hit);
+        const RayRun r = RunCone("cns", f, in, {form}, NoCache());
+        EXPECT_EQ(r.result.depthHit, 0.5f);
+        EXPECT_TRUE(r.result.hit);
+        EXPECT_EQ(r.counts.nFetches, 2u);
+        EXPECT_EQ(r.result.nCoarse, 2);
+    }
+}
+
+TEST(Cns, StepsAsCsmWithTheSameCones) {
+    // Eq. 3.2 is csm's step with r = n_z / sqrt(1 - n_z^2). With float maps (the ratio
+    // and n_z of the same conservative cones) read at texel centres (nearest: bilinear
+    // filtering interpolates n_z, a concave function of r, so between centres cns's
+    // cone is narrower than csm's) the two kernels walk the same points up to
+    // rounding: on builtin:ramp, where every cone but the top row's is bounded, each
+    // ray ends at the same depth within 1e-5.
+    const DepthField f = MakeBuiltinMap("ramp", 64, 64);
+    const KernelMapSettings fl = NoCache(ConeEncoding::Float);
+    SamplerState nearest;
+    nearest.filter = Filter::Nearest;
+    int sameSteps = 0;
+    for (int k = 0; k < 64; ++k) {
+        const float a = 0.15f + 0.01f * float(k % 8), phi = 0.7f * float(k);
+        const MarchInput in{{0.013f * float(k), 0.029f * float(k)},
+                            {a * std::cos(phi), a * std::sin(phi)},
+                            1.0f};
+        const RayRun c = RunCone("csm", f, in, {"cone_steps=12"}, fl, nearest);
+        const RayRun n = RunCone("cns", f, in, {"cone_steps=12"}, fl, nearest);
+        EXPECT_NEAR(n.result.depthHit, c.result.depthHit, 1e-5) << k;
+        // A step that lands on the surface to within rounding may need one trip more
+        // or less to see itself inside (and the top row's unbounded cone is 180° for
+        // cns, ratio 1024 for csm).
+        EXPECT_LE(std::abs(n.result.nCoarse - c.result.nCoarse), 1) << k;
+        sameSteps += n.result.nCoarse == c.result.nCoarse;
+    }
+    EXPECT_GE(sameSteps, 48);
+}
+
+TEST(Cns, RcnsReadsTheRelaxedConeNormalMap) {
+    // rcns names "cone-normal --relaxed": the bound layer is n_z of the Listing 18-2
+    // relaxed cones (maps --kind cone-normal --relaxed), cns's is n_z of the
+    // conservative ones. Relaxed cones are never narrower, except where the
+    // conservative cone is wider than the Listing's initial ratio 1 (n_z = 1/sqrt 2).
+    const DepthField f = MakeBuiltinMap("shapes", 32, 32);
+    const KernelMapSettings fl = NoCache(ConeEncoding::Float);
+    auto layer = [&](const char* m) {
+        const KernelInfo& info = FindMethod(m);
+        const auto layers =
+            KernelConeLayers(f, MakeKernel(info, ResolveParams(info, {})), fl);
+        EXPECT_EQ(layers.size(), 1u);
+        return layers[0].depth;
+    };
+    ConeMapParams relaxed;
+    relaxed.relaxed = true;
+    EXPECT_EQ(layer("rcns"), GenerateConeMap(f, ConeKind::ConeNormal, relaxed).values);
+    EXPECT_EQ(layer("cns"), GenerateConeMap(f, ConeKind::ConeNormal, {}).values);
+    const auto c = layer("cns"), r = layer("rcns");
+    size_t wider = 0;
+    for (size_t i = 0; i < c.size(); ++i) {
+        if (c[i] <= 0.70710677f) {
+            EXPECT_GE(r[i], c[i]) << i;
+        }
+        wider += r[i] > c[i];
+    }
+    EXPECT_GT(wider, c.size() / 4);
+    ASSERT_TRUE(ParseKernelMap("cone-normal --relaxed").has_value());
+    EXPECT_TRUE(ParseKernelMap("cone-normal --relaxed")->params.relaxed);
+    EXPECT_FALSE(ParseKernelMap("cone-normal")->params.relaxed);
+    EXPECT_FALSE(ParseKernelMap("cone-normal --relax").has_value());
 }
 
 namespace {
