@@ -38,11 +38,20 @@ void RegisterMethodsCommand(CLI::App& root) {
             }
             if (!m.glslFile.empty())
                 std::cout << "    GLSL twin: kernels/glsl/" << m.glslFile << "\n";
-            for (const ParamSpec& p : m.params)
+            for (const ParamSpec& p : m.params) {
+                if (!p.choices.empty()) {
+                    std::cout << "    --set " << p.name << "="
+                              << p.choices[size_t(p.defaultValue)] << "  [";
+                    for (size_t c = 0; c < p.choices.size(); ++c)
+                        std::cout << (c ? "|" : "") << p.choices[c];
+                    std::cout << "]  " << p.help << "\n";
+                    continue;
+                }
                 std::cout << "    --set " << p.name << "=" << Number(p.defaultValue)
                           << "  [" << Number(p.minValue) << ", " << Number(p.maxValue)
                           << "]" << (p.integer ? " integer" : "") << "  " << p.help
                           << "\n";
+            }
             std::cout << "\n";
         }
         if (*names)

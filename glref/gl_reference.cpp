@@ -134,7 +134,7 @@ struct GlReference::Impl {
     bool hasBallot = false;
 
     GLuint program = 0, vao = 0, vbo = 0, ibo = 0, texture = 0, coneArray = 0, fbo = 0,
-           ssbo = 0, traceBuffer = 0;
+           ssbo = 0, traceBuffer = 0, coneSampler = 0;
     bool tracing = false;
     static constexpr int kTraceCapacity = 4096;
     GLuint targets[2] = {0, 0};
@@ -154,9 +154,11 @@ struct GlReference::Impl {
         if (traceBuffer) glDeleteBuffers(1, &traceBuffer);
         if (texture) glDeleteTextures(1, &texture);
         if (coneArray) glDeleteTextures(1, &coneArray);
+        if (coneSampler) glDeleteSamplers(1, &coneSampler);
         if (fbo) glDeleteFramebuffers(1, &fbo);
         if (targets[0]) glDeleteTextures(2, targets);
-        program = vao = vbo = ibo = ssbo = traceBuffer = texture = coneArray = fbo = 0;
+        program = vao = vbo = ibo = ssbo = traceBuffer = texture = coneArray = fbo =
+            coneSampler = 0;
         targets[0] = targets[1] = 0;
     }
 };
@@ -408,6 +410,35 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
         setSampling(GL_TEXTURE_2D_ARRAY);
         glActiveTexture(GL_TEXTURE0);
     }
+    // cone_filter other than the height's: the same texture again on unit 2 (RG) or 3
+    // (the layers) through a sampler object with the cone filter; the twin then reads
+    // the ratio with a second texture call (sampler.glsl).
+    bool coneSeparate = false;
+    if (!scene.kernel.Info().maps.empty()) {
+        const Filter coneFilter = KernelConeFilter(scene.kernel, scene.sampler.filter);
+        coneSeparate = coneFilter != scene.sampler.filter;
+        if (coneSeparate) {
+            if (scene.format == TextureFormat::R8)
+                throw Error(
+                    "GL reference: cone_filter differs from --filter with an 8-bit "
+                    "texture (not modelled)");
+            glGenSamplers(1, &m.coneSampler);
+            const GLint f = coneFilter == Filter::Nearest ? GL_NEAREST : GL_LINEAR;
+            glSamplerParameteri(m.coneSampler, GL_TEXTURE_MIN_FILTER, f);
+            glSamplerParameteri(m.coneSampler, GL_TEXTURE_MAG_FILTER, f);
+            glSamplerParameteri(m.coneSampler, GL_TEXTURE_WRAP_S, wrap);
+            glSamplerParameteri(m.coneSampler, GL_TEXTURE_WRAP_T, wrap);
+            glSamplerParameteri(
+                m.coneSampler, GL_TEXTURE_REDUCTION_MODE_ARB,
+                coneFilter == Filter::Min4 ? GL_MIN : GL_WEIGHTED_AVERAGE_ARB);
+            const GLuint unit = layered ? 3 : 2;
+            glActiveTexture(GL_TEXTURE0 + unit);
+            glBindTexture(layered ? GL_TEXTURE_2D_ARRAY : GL_TEXTURE_2D,
+                          layered ? m.coneArray : m.texture);
+            glBindSampler(unit, m.coneSampler);
+            glActiveTexture(GL_TEXTURE0);
+        }
+    }
 
     // Targets: two RGBA32F colour attachments, no depth buffer (the plane's two triangles
     // do not overlap, so the C++ depth test removes nothing).
@@ -447,6 +478,9 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     glUniform1f(loc("uOrthoViewZ"), u.orthoViewZ);
     glUniform1i(loc("uHeights"), 0);
     glUniform1i(loc("uConeLayers"), 1);
+    glUniform1i(loc("uConeFiltered"), 2);
+    glUniform1i(loc("uConeLayersFiltered"), 3);
+    glUniform1i(loc("uConeSeparate"), coneSeparate ? 1 : 0);
     glUniform1i(loc("uConeSquared"), scene.coneSquared ? 1 : 0);
     UploadKernelUniforms(m.program, scene.kernel);
 

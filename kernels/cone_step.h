@@ -119,8 +119,8 @@ struct ConeStepPreset<ConeFamily::Conservative> {
                                       kSource =
                                           "Burger 2018 (004) Alg. 4; Dummer 2006; Chen & "
                                           "Chuang 2009 (000) §II-A";
-    static constexpr std::array<ParamSpec, 4> kParams = {ConeSteps(15), kConeStepForm,
-                                                         kEarlyExitParam, kBudgetParam};
+    static constexpr std::array<ParamSpec, 5> kParams = {
+        ConeSteps(15), kConeStepForm, kConeFilterParam, kEarlyExitParam, kBudgetParam};
     static constexpr auto& kMaps = kConeMaps;
     static constexpr std::string_view kEncoding = "u8sqrt";  // Dummer; 004 §2.4
 };
@@ -138,10 +138,11 @@ struct ConeStepPreset<ConeFamily::Relaxed> {
         kName = "rcs",
         kTitle = "relaxed cone stepping + binary search",
         kSource = "Policarpo & Oliveira, GPU Gems 3 ch. 18 (001) Listing 18-3";
-    static constexpr std::array<ParamSpec, 5> kParams = {
+    static constexpr std::array<ParamSpec, 6> kParams = {
         ConeSteps(15),
         {"refine_steps", 6, 0, 64, true, "binary-search steps", "uRefineSteps"},
         kConeStepForm,
+        kConeFilterParam,
         kEarlyExitFixed,
         kBudgetParam};
     static constexpr auto& kMaps = kRelaxedMaps;
@@ -150,8 +151,8 @@ struct ConeStepPreset<ConeFamily::Relaxed> {
 inline constexpr std::array<std::string_view, 1> kQuadMaps = {"quad"};
 inline constexpr std::array<std::string_view, 1> kAcm4Maps = {"acm4"};
 inline constexpr std::array<std::string_view, 1> kAcm8Maps = {"acm8"};
-inline constexpr std::array<ParamSpec, 4> kDirectionalParams = {
-    ConeSteps(15), kConeStepForm, kEarlyExitParam, kBudgetParam};
+inline constexpr std::array<ParamSpec, 5> kDirectionalParams = {
+    ConeSteps(15), kConeStepForm, kConeFilterParam, kEarlyExitParam, kBudgetParam};
 template <>
 struct ConeStepPreset<ConeFamily::Quad> {
     static constexpr std::string_view

@@ -27,6 +27,7 @@
 // (Fetch::layer).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <glm/vec2.hpp>
 #include <map>
@@ -64,7 +65,8 @@ struct MarchResult {
 };
 
 /// A numeric kernel parameter as given to `--set name=value`, defined once with its
-/// kernel.
+/// kernel. A parameter with `choices` takes one of their names (or its index), and its
+/// value is the index: `--set cone_filter=min4`.
 struct ParamSpec {
     std::string_view name;
     double defaultValue;
@@ -72,6 +74,7 @@ struct ParamSpec {
     bool integer;               ///< integers only (booleans are integers in [0,1])
     std::string_view help;
     std::string_view uniform;  ///< the GLSL twin's uniform ("" = none)
+    std::span<const std::string_view> choices = {};  ///< names of 0, 1, ... (or none)
 };
 
 /// A uniform the twin needs that is fixed by the kernel, not a parameter.
@@ -123,6 +126,22 @@ inline constexpr ParamSpec kEarlyExitParam = {
     "uEarlyExit"};
 inline constexpr ParamSpec kBudgetParam = {
     "budget", 0, 0, 1000000, true, "fetch budget per fragment; 0 = none", "uBudget"};
+
+/// How the cone kernels sample their cone map (kernels/cone_step.h): as the height map
+/// (`--filter`), or bilinear (the papers), nearest, min of the bilinear footprint (the
+/// conservative choice). The values of the `cone_filter` parameter, in this order.
+inline constexpr std::array<std::string_view, 4> kConeFilterChoices = {"auto", "bilinear",
+                                                                       "nearest", "min4"};
+inline constexpr ParamSpec kConeFilterParam = {
+    "cone_filter",
+    0,
+    0,
+    3,
+    true,
+    "cone-map sampling: auto (as --filter), bilinear (the papers), nearest, min4 (the "
+    "minimum of the bilinear footprint)",
+    "uConeFilter",
+    kConeFilterChoices};
 
 /// A pack of rays, one per lane.
 template <class L>

@@ -64,7 +64,20 @@ ParamValues ResolveParams(const KernelInfo& method,
                         std::string(method.name) + "\"; valid: " + valid);
         }
         double v = 0.0;
+        if (!def->choices.empty()) {
+            for (size_t c = 0; c < def->choices.size(); ++c)
+                if (def->choices[c] == text) v = double(c), text = std::to_string(c);
+        }
         auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+        if (!def->choices.empty() &&
+            (ec != std::errc() || ptr != text.data() + text.size() || v < 0 ||
+             v >= double(def->choices.size()) || v != std::floor(v))) {
+            std::string names;
+            for (const auto& c : def->choices)
+                names += std::string(names.empty() ? "" : ", ") + std::string(c);
+            throw Error("--set " + s.substr(0, eq) + "=" + s.substr(eq + 1) +
+                        ": must be one of: " + names);
+        }
         if (ec != std::errc() || ptr != text.data() + text.size() || !std::isfinite(v))
             throw Error("--set " + key + "=" + text + ": not a number");
         if (def->integer && v != std::floor(v))
@@ -92,6 +105,23 @@ Kernel MakeKernel(const KernelInfo& method, const ParamValues& values) {
         k.values[std::string(p.name)] = it == values.end() ? p.defaultValue : it->second;
     }
     return k;
+}
+
+Filter KernelConeFilter(const Kernel& kernel, Filter heightFilter) {
+    auto it = kernel.values.find(kConeFilterParam.name);
+    const int choice = it == kernel.values.end() ? 0 : int(it->second);
+    static_assert(kConeFilterChoices[1] == "bilinear" &&
+                  kConeFilterChoices[2] == "nearest" && kConeFilterChoices[3] == "min4");
+    switch (choice) {
+        case 1:
+            return Filter::Bilinear;
+        case 2:
+            return Filter::Nearest;
+        case 3:
+            return Filter::Min4;
+        default:
+            return heightFilter;
+    }
 }
 
 uint32_t Kernel::Budget() const {

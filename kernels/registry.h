@@ -16,6 +16,7 @@
 #include "kernels/kernel.h"
 #include "kernels/linear_search.h"
 #include "kernels/parallax.h"
+#include "texture/sampler.h"
 
 namespace reliefsim {
 
@@ -62,6 +63,11 @@ struct Kernel {
 
 /// The kernel for a method from resolved parameters.
 Kernel MakeKernel(const KernelInfo& method, const ParamValues& values);
+
+/// The filter a cone kernel's map is sampled with: its `cone_filter`
+/// (kConeFilterChoices), with auto (and kernels without the parameter) sampling as the
+/// height map does.
+Filter KernelConeFilter(const Kernel& kernel, Filter heightFilter);
 
 namespace detail {
 template <class Fn, class... K>

@@ -53,6 +53,14 @@ ConeEncoding KernelMapEncoding(const Kernel& kernel, const KernelMapSettings& ma
 void ValidateKernelMaps(const Kernel& kernel, const SamplerState& sampler,
                         const KernelMapSettings& maps) {
     if (kernel.Info().maps.empty()) return;
+    const Filter coneFilter = KernelConeFilter(kernel, sampler.filter);
+    if (sampler.precision == Precision::Llvmpipe8 && coneFilter != sampler.filter)
+        throw Error("--set cone_filter=" + std::string(kFilterNames.Name(coneFilter)) +
+                    ": with an 8-bit height texture (--texture-format r8) the cone map "
+                    "is sampled as the height (--filter " +
+                    std::string(kFilterNames.Name(sampler.filter)) +
+                    "; llvmpipe's 8-bit path is modelled for one filter per texture); "
+                    "use --texture-format r32f or cone_filter=auto");
     const ConeEncoding e = KernelMapEncoding(kernel, maps);
     const bool eightBit = e == ConeEncoding::U8 || e == ConeEncoding::U8Sqrt;
     if (sampler.precision == Precision::Llvmpipe8 && !eightBit)
@@ -218,6 +226,7 @@ Textures BindKernelTextures(const DepthField& field, const SamplerState& sampler
     ValidateKernelMaps(kernel, sampler, maps);
     const bool squared = KernelMapEncoding(kernel, maps) == ConeEncoding::U8Sqrt;
     BindConeChannel(t, KernelConeLayers(field, kernel, maps, cacheHit), squared);
+    t.coneFilter = KernelConeFilter(kernel, sampler.filter);
     return t;
 }
 

@@ -39,6 +39,10 @@ struct Textures {
     /// Every layer's 8-bit codes, layer k at k * width * height (8-bit maps only).
     std::shared_ptr<const std::vector<uint8_t>> cone8;
     bool coneSquared = false;  ///< the ratio is stored as sqrt(r): square after sampling
+    /// The ratio channel's filter (the kernel's cone_filter; Sampler's filter when
+    /// equal). When it differs from `sampler.filter` a fetch samples the ratio with its
+    /// own footprint: a second texture call on the GL side.
+    Filter coneFilter = Filter::Bilinear;
 };
 
 /// Binds the ratio channel `layers` (each the depth's size; at least one) to `t`, padded
@@ -76,6 +80,7 @@ struct LaneTextures {
     const uint8_t* cone8 = nullptr;     ///< its 8-bit codes (with depth8)
     int64_t cone8Count = 0;             ///< all layers
     bool coneSquared = false;
+    Filter coneFilter = Filter::Bilinear;
 };
 
 inline LaneTextures BindLanes(const Textures& t) {
@@ -104,6 +109,10 @@ inline LaneTextures BindLanes(const Textures& t) {
         b.coneField = t.cone.data();
         b.coneLayers = int(t.cone.size());
         b.coneSquared = t.coneSquared;
+        b.coneFilter = t.coneFilter;
+        // llvmpipe's 8-bit path is modelled for bilinear only (render/kernel_maps.cpp
+        // ValidateKernelMaps refuses the others with an 8-bit texture).
+        RS_CHECK(!b.depth8 || b.coneFilter == Filter::Bilinear);
         if (b.depth8) {
             RS_CHECK(t.cone8 &&
                      t.cone8->size() == t.cone.size() * t.depth->depth8.size());
@@ -340,6 +349,49 @@ RS_INLINE typename L::I Texel8Lanes(const LaneTextures& tex, const typename L::I
 /// active lane read to texelReads (kCount = false: leaves it alone, the uncounted
 /// baseline of the benchmarks). Inactive lanes return an unspecified value and read
 /// in-range texels (their coordinates are those of an earlier fetch).
+namespace detail {
+
+/// One fetch of padded texels `data` (the layout of LaneTextures::padded, `count` of
+/// them; index offset `off` per lane: a cone layer) with `filter`, as llvmpipe's float
+/// path samples it; adds the texels read to texelReads on active lanes (kCount).
+template <class L, bool kCount = true>
+RS_INLINE typename L::F SamplePaddedLanes(const LaneTextures& tex, const float* data,
+                                          int64_t count, Filter filter,
+                                          const typename L::F& u, const typename L::F& v,
+                                          const typename L::I& off,
+                                          const typename L::M& active,
+                                          typename L::F& texelReads) {
+    using F = typename L::F;
+    using I = typename L::I;
+    const SamplerState& st = tex.sampler;
+    if (filter == Filter::Nearest) {
+        const I i = WrapNearestLanes<L>(u, tex.width, st.wrap, tex.pow2W);
+        const I j = WrapNearestLanes<L>(v, tex.height, st.wrap, tex.pow2H);
+        if constexpr (kCount) Assign(active, texelReads, texelReads + F(1.0f));
+        const I at = j * I(tex.stride) + i + off;
+        return GatherLanes<F, L::kWidth>(data, size_t(count), at);
+    }
+    auto s = WrapLinearLanes<L>(u, tex.width, st.wrap, tex.pow2W);
+    auto t = WrapLinearLanes<L>(v, tex.height, st.wrap, tex.pow2H);
+    const auto f =
+        LoadFootprint<L>(data, count, tex.stride, t.i0 * I(tex.stride) + s.i0 + off);
+    if constexpr (kCount) Assign(active, texelReads, texelReads + F(4.0f));
+    if (filter == Filter::Min4) {
+        const F r0 = Select(s.w != F(0.0f), ::reliefsim::MinSse(f.t00, f.t10), f.t00);
+        const F r1 = Select(s.w != F(0.0f), ::reliefsim::MinSse(f.t01, f.t11), f.t01);
+        return Select(t.w != F(0.0f), ::reliefsim::MinSse(r0, r1), r0);
+    }
+    if (st.precision == Precision::Gpu8) {
+        s.w = stdx::nearbyint(s.w * F(256.0f)) * F(1.0f / 256.0f);
+        t.w = stdx::nearbyint(t.w * F(256.0f)) * F(1.0f / 256.0f);
+    }
+    const F r0 = Fma(s.w, f.t10 - f.t00, f.t00);
+    const F r1 = Fma(s.w, f.t11 - f.t01, f.t01);
+    return Fma(t.w, r1 - r0, r0);
+}
+
+}  // namespace detail
+
 template <class L, bool kCount = true>
 RS_INLINE typename L::F SampleHeightLanes(const LaneTextures& tex, const typename L::F& u,
                                           const typename L::F& v,
@@ -365,31 +417,9 @@ RS_INLINE typename L::F SampleHeightLanes(const LaneTextures& tex, const typenam
         return stdx::static_simd_cast<F>(detail::Lerp8Lanes(t.w, r0, r1)) *
                F(float(1.0 / 255.0));
     }
-    if (tex.padded) {
-        if (st.filter == Filter::Nearest) {
-            const I i = detail::WrapNearestLanes<L>(u, tex.width, st.wrap, tex.pow2W);
-            const I j = detail::WrapNearestLanes<L>(v, tex.height, st.wrap, tex.pow2H);
-            if constexpr (kCount) Assign(active, texelReads, texelReads + F(1.0f));
-            return detail::TexelLanes<L>(tex, j * I(tex.stride) + i);
-        }
-        auto s = detail::WrapLinearLanes<L>(u, tex.width, st.wrap, tex.pow2W);
-        auto t = detail::WrapLinearLanes<L>(v, tex.height, st.wrap, tex.pow2H);
-        const auto f = detail::LoadFootprint<L>(tex.padded, tex.paddedCount, tex.stride,
-                                                t.i0 * I(tex.stride) + s.i0);
-        if constexpr (kCount) Assign(active, texelReads, texelReads + F(4.0f));
-        if (st.filter == Filter::Min4) {
-            const F r0 = Select(s.w != F(0.0f), MinSse(f.t00, f.t10), f.t00);
-            const F r1 = Select(s.w != F(0.0f), MinSse(f.t01, f.t11), f.t01);
-            return Select(t.w != F(0.0f), MinSse(r0, r1), r0);
-        }
-        if (st.precision == Precision::Gpu8) {
-            s.w = stdx::nearbyint(s.w * F(256.0f)) * F(1.0f / 256.0f);
-            t.w = stdx::nearbyint(t.w * F(256.0f)) * F(1.0f / 256.0f);
-        }
-        const F r0 = Fma(s.w, f.t10 - f.t00, f.t00);
-        const F r1 = Fma(s.w, f.t11 - f.t01, f.t01);
-        return Fma(t.w, r1 - r0, r0);
-    }
+    if (tex.padded)
+        return detail::SamplePaddedLanes<L, kCount>(
+            tex, tex.padded, tex.paddedCount, st.filter, u, v, I(0), active, texelReads);
     F out(0.0f);
     for (int k = 0; k < L::kWidth; ++k) {
         if (!active[k]) continue;
@@ -433,6 +463,14 @@ RS_INLINE typename L::F SampleHeightConeLanes(
         h = lerp2(tex.depth8, tex.depth8Count, I(0));
         c = lerp2(tex.cone8, tex.cone8Count, layer * I(int(tex.depth8Count)));
         Assign(active, texelReads, texelReads + F(4.0f));
+    } else if (tex.padded && tex.coneFilter != st.filter) {
+        // cone_filter differs from the height's: two samples, each with its own
+        // footprint (two texture calls on the twin), both counted.
+        h = detail::SamplePaddedLanes<L>(tex, tex.padded, tex.paddedCount, st.filter, u,
+                                         v, I(0), active, texelReads);
+        c = detail::SamplePaddedLanes<L>(
+            tex, tex.conePadded, tex.conePaddedCount, tex.coneFilter, u, v,
+            layer * I(int(tex.paddedCount)), active, texelReads);
     } else if (tex.padded) {
         if (st.filter == Filter::Nearest) {
             const I i = detail::WrapNearestLanes<L>(u, tex.width, st.wrap, tex.pow2W);
@@ -481,10 +519,14 @@ RS_INLINE typename L::F SampleHeightConeLanes(
             if (!active[k]) continue;
             FetchCounts counts;
             h[k] = SampleCounted(*tex.field, st, u[k], v[k], &counts);
-            FetchCounts unused;
+            FetchCounts cone;
             RS_DCHECK(layer[k] >= 0 && layer[k] < tex.coneLayers);
-            c[k] = SampleCounted(*tex.coneField[layer[k]], st, u[k], v[k], &unused);
+            SamplerState coneState = st;
+            coneState.filter = tex.coneFilter;
+            c[k] = SampleCounted(*tex.coneField[layer[k]], coneState, u[k], v[k], &cone);
             texelReads[k] = texelReads[k] + float(counts.nTexelReads);
+            if (tex.coneFilter != st.filter)  // a second sample with its own footprint
+                texelReads[k] = texelReads[k] + float(cone.nTexelReads);
         }
     }
     ratio = tex.coneSquared ? c * c : c;

@@ -59,6 +59,7 @@ void BindConeChannel(Textures& t, std::vector<DepthField> layers, bool squared) 
     t.cone8 = eightBit ? std::make_shared<const std::vector<uint8_t>>(std::move(codes))
                        : nullptr;
     t.coneSquared = squared;
+    t.coneFilter = t.sampler.filter;  // sampled as the height unless told otherwise
 }
 
 }  // namespace reliefsim

@@ -12,10 +12,17 @@ float SampleHeight(vec2 uv) { return textureLod(uHeights, uv, 0.0).r; }
 // with the ratio's 8-bit code): depth in .r, the stored ratio in .g, decoded as
 // texture/lane_sampler.h SampleHeightConeLanes does (squared for the sqrt encoding).
 uniform int uConeSquared;  // 1: the ratio is stored as sqrt(r) (Dummer; 004 Alg. 4)
+// cone_filter other than --filter: the same textures through a sampler object with the
+// cone filter (units 2 and 3); the ratio is then a second texture call.
+uniform int uConeSeparate;
+uniform int uConeFilter;  // the cone_filter parameter; the sampler objects apply it
+uniform sampler2D uConeFiltered;
+uniform sampler2DArray uConeLayersFiltered;
 
 vec2 SampleHeightCone(vec2 uv) {
     vec4 x = textureLod(uHeights, uv, 0.0);
     precise float r = x.g;
+    if (uConeSeparate != 0) r = textureLod(uConeFiltered, uv, 0.0).g;
     if (uConeSquared != 0) r = r * r;
     return vec2(x.r, r);
 }
@@ -27,6 +34,7 @@ uniform sampler2DArray uConeLayers;
 vec2 SampleHeightConeLayer(vec2 uv, int layer) {
     vec4 x = textureLod(uConeLayers, vec3(uv, float(layer)), 0.0);
     precise float r = x.g;
+    if (uConeSeparate != 0) r = textureLod(uConeLayersFiltered, vec3(uv, float(layer)), 0.0).g;
     if (uConeSquared != 0) r = r * r;
     return vec2(x.r, r);
 }

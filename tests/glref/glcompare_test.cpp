@@ -218,6 +218,37 @@ TEST(GlCompare, SamplerModesParametersAndViewsAreBitIdentical) {
     }
 }
 
+// cone_filter other than --filter (the twin reads the ratio with a second texture call
+// through a sampler object): every cone kernel, each pairing of height and cone filter.
+TEST(GlCompare, ConeFiltersAreBitIdentical) {
+    struct Pair {
+        Filter height;
+        const char* cone;
+    };
+    const Pair pairs[] = {{Filter::Bilinear, "min4"},
+                          {Filter::Bilinear, "nearest"},
+                          {Filter::Nearest, "bilinear"},
+                          {Filter::Min4, "nearest"}};
+    int compared = 0;
+    for (const KernelInfo* info : Methods()) {
+        if (info->maps.empty()) continue;
+        for (const Pair& p : pairs)
+            for (const char* map : {"builtin:noise", "builtin:shapes"}) {
+                SCOPED_TRACE(std::string(info->name) + " on " + map + " filter " +
+                             std::string(ToString(p.height)) + " cone_filter " + p.cone);
+                RenderSettings s;
+                s.method = info->name;
+                s.set = {std::string("cone_filter=") + p.cone};
+                s.width = s.height = 112;
+                s.sampler.filter = p.height;
+                ExpectIdentical(
+                    RunGlCompare(LoadField(map, TextureFormat::R32F), s, Gl()));
+                ++compared;
+            }
+    }
+    EXPECT_GE(compared, 7 * 4 * 2);  // csm, rcs, qcsm, acm4, acm8, cns, rcns
+}
+
 // The orthographic texture-space view: every kernel, float and 8-bit, a slanted and a
 // steep direction, a non-square size.
 TEST(GlCompare, OrthoCameraIsBitIdentical) {

@@ -352,3 +352,109 @@ TEST(DirectionalCones, FewerCoarseStepsThanCsmOnShapes) {
     for (const char* m : {"qcsm", "acm4", "acm8"}) EXPECT_LT(avgCoarse(m), csm) << m;
     EXPECT_LT(avgCoarse("acm8"), avgCoarse("acm4"));  // narrower sectors, wider cones
 }
+
+TEST(ConeFilter, NamesTheWayTheRatioIsSampled) {
+    const KernelInfo& csm = FindMethod("csm");
+    EXPECT_EQ(ResolveParams(csm, {"cone_filter=min4"}).at("cone_filter"), 3.0);
+    EXPECT_EQ(ResolveParams(csm, {"cone_filter=nearest"}).at("cone_filter"), 2.0);
+    EXPECT_EQ(ResolveParams(csm, {"cone_filter=1"}).at("cone_filter"), 1.0);
+    EXPECT_EQ(ResolveParams(csm, {}).at("cone_filter"), 0.0);  // auto
+    for (const char* bad : {"cone_filter=bicubic", "cone_filter=4", "cone_filter=1.5",
+                            "cone_filter=", "cone_filter=-1"}) {
+        try {
+            ResolveParams(csm, {bad});
+            ADD_FAILURE() << bad;
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("must be one of: auto, bilinear, "
+                                                 "nearest, min4"),
+                      std::string::npos)
+                << e.what();
+        }
+    }
+    EXPECT_THROW(ResolveParams(FindMethod("relief"), {"cone_filter=min4"}), Error);
+    const Kernel k = MakeKernel(csm, ResolveParams(csm, {"cone_filter=min4"}));
+    EXPECT_EQ(KernelConeFilter(k, Filter::Nearest), Filter::Min4);
+    const Kernel a = MakeKernel(csm, ResolveParams(csm, {}));
+    EXPECT_EQ(KernelConeFilter(a, Filter::Nearest), Filter::Nearest);
+    // An 8-bit height texture samples both channels with one filter (llvmpipe's 8-bit
+    // path is modelled for that only).
+    RenderSettings s;
+    s.method = "csm";
+    s.sampler.precision = Precision::Llvmpipe8;
+    s.set = {"cone_filter=min4"};
+    EXPECT_THROW(ValidateSettings(s), Error);
+    s.set = {"cone_filter=bilinear"};
+    EXPECT_NO_THROW(ValidateSettings(s));
+}
+
+TEST(ConeFilter, FirstStepUsesTheFilteredRatio) {
+    // The first fetch is at uvEntry (t = 0): the step is d = r D / (a + r), so the
+    // ratio the kernel used is r = a d / (D - d). At u = (i + 0.75) / W, v = (j + 0.875)
+    // / H the bilinear footprint is texels (i..i+1, j..j+1) with weights (0.25, 0.375)
+    // and the nearest texel is (i, j). The height stays bilinear whatever cone_filter.
+    const DepthField f = MakeBuiltinMap("bumps", 32, 32);
+    const ConeMap cone = GenerateConeMap(f, ConeKind::Cone, {});
+    const KernelMapSettings fl = NoCache(ConeEncoding::Float);
+    auto lerp2 = [](float a, float b, float c, float d) {
+        const float r0 = a + 0.25f * (b - a), r1 = c + 0.25f * (d - c);
+        return r0 + 0.375f * (r1 - r0);
+    };
+    int checked = 0;
+    for (int j = 3; j < 28; j += 6)
+        for (int i = 2; i < 28; i += 5) {
+            const float r00 = cone.At(i, j), r10 = cone.At(i + 1, j),
+                        r01 = cone.At(i, j + 1), r11 = cone.At(i + 1, j + 1);
+            if (std::max({r00, r10, r01, r11}) > 2.0f) continue;  // keep the test tight
+            const float D =
+                lerp2(f.At(i, j), f.At(i + 1, j), f.At(i, j + 1), f.At(i + 1, j + 1));
+            if (D < 0.05f) continue;
+            const MarchInput in{{(float(i) + 0.75f) / 32.0f, (float(j) + 0.875f) / 32.0f},
+                                {0.2f, 0.1f},
+                                1.0f};
+            const float a = std::sqrt(0.2f * 0.2f + 0.1f * 0.1f);
+            auto used = [&](const char* filter) {
+                const RayRun r =
+                    RunCone("csm", f, in,
+                            {"cone_steps=1", std::string("cone_filter=") + filter}, fl);
+                EXPECT_EQ(r.counts.nFetches, 1u);
+                const float d = r.result.depthHit;
+                return std::pair{a * d / (D - d), r.counts.nTexelReads};
+            };
+            const auto [bil, bilReads] = used("bilinear");
+            const auto [nea, neaReads] = used("nearest");
+            const auto [mn, mnReads] = used("min4");
+            const float tol = 2e-4f;
+            EXPECT_NEAR(bil, lerp2(r00, r10, r01, r11), tol) << i << "," << j;
+            EXPECT_NEAR(nea, r00, tol) << i << "," << j;
+            EXPECT_NEAR(mn, std::min({r00, r10, r01, r11}), tol) << i << "," << j;
+            // One footprint when the cone is sampled as the height; a second one (1 or 4
+            // texels) when it is not.
+            EXPECT_EQ(bilReads, 4u);
+            EXPECT_EQ(neaReads, 5u);
+            EXPECT_EQ(mnReads, 8u);
+            ++checked;
+        }
+    EXPECT_GE(checked, 10);
+}
+
+TEST(ConeFilter, Min4RemovesMostStepsPastTheFirstHit) {
+    // Texel-centre cone maps are not conservative for the bilinear surface
+    // (docs/kernels.md "Conservative, but for which surface?"): bilinear sampling of the
+    // ratio steps past the exact first hit on many pixels (the dissertation's Fig. 4.6
+    // artifact), min4 on far fewer; csm over a flat plane never does (its cones are
+    // unbounded and the step only approaches the plane).
+    auto past = [](const DepthField& f, const char* filter) {
+        RenderSettings s;
+        s.method = "csm";
+        s.width = s.height = 96;
+        s.maps = NoCache(ConeEncoding::Float);
+        s.set = {"cone_steps=64", std::string("cone_filter=") + filter};
+        return Render(f, s).referenceSummary.pastFirstHitPixels;
+    };
+    const DepthField shapes = MakeBuiltinMap("shapes", 128, 128);
+    const uint64_t bilinear = past(shapes, "bilinear"), min4 = past(shapes, "min4");
+    EXPECT_GT(bilinear, 100u);
+    EXPECT_LT(min4 * 3, bilinear);
+    EXPECT_EQ(past(Constant(0.5f, 64), "bilinear"), 0u);
+    EXPECT_EQ(past(Constant(0.5f, 64), "min4"), 0u);
+}

@@ -56,6 +56,11 @@ TEST(Registry, EveryKernelDescribesItself) {
             EXPECT_LE(p.minValue, p.defaultValue) << m->name << " " << p.name;
             EXPECT_LE(p.defaultValue, p.maxValue) << m->name << " " << p.name;
             EXPECT_FALSE(p.uniform.empty()) << m->name << " " << p.name;
+            if (!p.choices.empty()) {  // the value is the index of a name
+                EXPECT_TRUE(p.integer) << p.name;
+                EXPECT_EQ(p.minValue, 0.0) << p.name;
+                EXPECT_EQ(p.maxValue, double(p.choices.size() - 1)) << p.name;
+            }
             hasBudget = hasBudget || p.name == "budget";
         }
         EXPECT_TRUE(hasBudget) << m->name;  // the driver reads it
