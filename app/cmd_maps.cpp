@@ -42,6 +42,7 @@ struct MapsOptions {
     bool adaptive = false;
     bool safety = false;
     bool relaxed = false;
+    bool normal = false;
     float threshold = 0.25f;
     int levels = 3;
     int searchSteps = 128;
@@ -65,7 +66,7 @@ void CheckCombinations(const MapsOptions& o, ConeKind kind) {
     if (mip) {
         for (const char* opt :
              {"--encoding", "--adaptive", "--threshold", "--levels", "--search-steps",
-              "--stacked-count", "--relaxed", "--safety", "--external",
+              "--stacked-count", "--relaxed", "--normal", "--safety", "--external",
               "--external-channel", "--cache-dir", "--animate", "--bins"})
             if (o.Given(opt))
                 refuse(opt, "does not apply to " + k +
@@ -79,7 +80,8 @@ void CheckCombinations(const MapsOptions& o, ConeKind kind) {
                        k);
         for (const char* opt :
              {"--out", "--cache-dir", "--external", "--external-channel", "--safety",
-              "--encoding", "--search-steps", "--stacked-count", "--relaxed", "--bins"})
+              "--encoding", "--search-steps", "--stacked-count", "--relaxed", "--normal",
+              "--bins"})
             if (o.Given(opt))
                 refuse(opt,
                        "does not apply with --animate (frames are regenerated and timed, "
@@ -101,11 +103,15 @@ void CheckCombinations(const MapsOptions& o, ConeKind kind) {
                    k);
     if (o.Given("--stacked-count") && kind != ConeKind::Stacked)
         refuse("--stacked-count", "applies to --kind stacked only, not " + k);
+    if (o.Given("--normal") && kind != ConeKind::Stacked)
+        refuse("--normal", "applies to --kind stacked only, not " + k +
+                               " (--kind cone-normal stores n_z of one cone)");
     if (o.Given("--external-channel") && o.external.empty())
         refuse("--external-channel", "applies only with --external");
     if (!o.external.empty()) {
-        for (const char* opt : {"--cache-dir", "--adaptive", "--threshold", "--levels",
-                                "--search-steps", "--stacked-count", "--relaxed"})
+        for (const char* opt :
+             {"--cache-dir", "--adaptive", "--threshold", "--levels", "--search-steps",
+              "--stacked-count", "--relaxed", "--normal"})
             if (o.Given(opt))
                 refuse(opt,
                        "does not apply with --external (the map is read, not generated)");
@@ -191,6 +197,7 @@ void Run(const MapsOptions& o) {
     p.searchSteps = o.searchSteps;
     p.stackedCount = o.stackedCount;
     p.relaxed = o.relaxed;
+    p.normal = o.normal;
     p.adaptive = o.adaptive;
     p.threshold = o.threshold;
     p.adaptiveLevels = o.levels;
@@ -351,6 +358,9 @@ void RegisterMapsCommand(CLI::App& root) {
     cmd->add_flag(
         "--relaxed", o->relaxed,
         "cone-normal, stacked: relaxed cones (Listing 18-2) instead of conservative");
+    cmd->add_flag("--normal", o->normal,
+                  "stacked: store n_z = r / sqrt(1 + r^2) of each cone (mcns) instead of "
+                  "its ratio");
     cmd->add_flag("--safety", o->safety, "3x3-minimum bilinear safety pass (Ban et al.)");
     cmd->add_option("--out", o->out,
                     "output: .exr (float, one channel per ratio) or .png (8-bit)");

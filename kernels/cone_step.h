@@ -73,6 +73,14 @@
 // --kind cone-normal --relaxed) and keeps rcs's binary search. The distance estimate
 // h n_z of eq. 3.1 is what the cone-normal soft shadows and AO read (not here: view rays
 // only).
+//
+// mcns (multiple cone normal stepping, 004 §3.4 method 1, Table 4.13): cns with K = 4
+// cones stacked over each texel (maps --kind stacked --normal): cone k has its apex at
+// depth a_k = D (K - k) / K (k = 0: the surface point, cns's cone) and stores n_z of
+// its side. "The cone that will lead to the largest step" is taken: each cone whose
+// apex lies below the ray point (t < a_k) gives eq. 3.2's step with h = a_k - t, and
+// the largest is kept. One fetch per trip returns the depth and all K values (the twin
+// reads the K layers of the (depth, n_z) array: K texture calls per trip).
 #pragma once
 
 #include <array>
@@ -108,7 +116,8 @@ enum class ConeFamily {
     Acm4,
     Acm8,
     ConeNormal,
-    RelaxedNormal
+    RelaxedNormal,
+    StackedNormal
 };
 
 template <ConeFamily kF>
@@ -206,12 +215,26 @@ struct ConeStepPreset<ConeFamily::RelaxedNormal> {
     static constexpr std::string_view kEncoding = "u8";
 };
 
+inline constexpr std::array<std::string_view, 1> kStackedNormalMaps = {
+    "stacked --normal"};
+template <>
+struct ConeStepPreset<ConeFamily::StackedNormal> {
+    static constexpr std::string_view
+        kName = "mcns",
+        kTitle = "multiple cone normal stepping (4 stacked cones)",
+        kSource = "Burger 2018 (004) §3.4 method 1, eq. 3.2, Table 4.13";
+    static constexpr auto& kParams = kDirectionalParams;
+    static constexpr auto& kMaps = kStackedNormalMaps;
+    static constexpr std::string_view kEncoding = "u8";  // as cns
+};
+
 /// Layers of the family's map as the kernel reads it.
 constexpr int ConeFamilyLayers(ConeFamily f) {
-    return f == ConeFamily::Quad   ? 8
-           : f == ConeFamily::Acm4 ? 4
-           : f == ConeFamily::Acm8 ? 8
-                                   : 1;
+    return f == ConeFamily::Quad            ? 8
+           : f == ConeFamily::Acm4          ? 4
+           : f == ConeFamily::Acm8          ? 8
+           : f == ConeFamily::StackedNormal ? kMaxStackedCones
+                                            : 1;
 }
 
 /// The layer a ray with direction (du, dv) reads (see the file comment). Exact
@@ -261,7 +284,10 @@ struct ConeStep {
                                      kFamily == detail::ConeFamily::RelaxedNormal;
     /// The map stores n_z of the cone side's normal (cns, rcns), not the ratio.
     static constexpr bool kNormal = kFamily == detail::ConeFamily::ConeNormal ||
-                                    kFamily == detail::ConeFamily::RelaxedNormal;
+                                    kFamily == detail::ConeFamily::RelaxedNormal ||
+                                    kFamily == detail::ConeFamily::StackedNormal;
+    /// Every fetch reads all stacked cones (mcns).
+    static constexpr bool kReadsAllLayers = kFamily == detail::ConeFamily::StackedNormal;
     static constexpr bool kReadsRatio = true;
     static constexpr int kConeLayers = detail::ConeFamilyLayers(kFamily);
     static constexpr std::array<GlslConstant, 2> kGlslConstants = {
@@ -323,7 +349,7 @@ struct ConeStep {
         first.t = zero;
         first.u = ray.U(zero);
         first.v = ray.V(zero);
-        if constexpr (kConeLayers > 1)
+        if constexpr (kConeLayers > 1 && !kReadsAllLayers)
             first.layer = stdx::static_simd_cast<typename L::I>(
                 detail::ConeLayerOf<kFamily>(ray.du, ray.dv));
     }
@@ -368,7 +394,17 @@ struct ConeStep {
             const M out = cone && !in;
             // (x.h - t) > 0 where out; the advance is computed on every lane and kept
             // where out, so a lane inside never divides by a zero ratio's result.
-            const F d = Advance(p, s.t, x.h, x.ratio, s.rayRatio, s.rdXy, s.rdZ);
+            F d = Advance(p, s.t, x.h, x.ratio, s.rayRatio, s.rdXy, s.rdZ);
+            if constexpr (kReadsAllLayers) {
+                // The stacked cones above the surface: the largest step of those whose
+                // apex a_k lies below the ray point (same order and tests as the twin).
+                for (int k = 1; k < kConeLayers; ++k) {
+                    const F apex = x.h * F(float(kConeLayers - k) / float(kConeLayers));
+                    const F dk = Advance(p, s.t, apex, x.stack[size_t(k)], s.rayRatio,
+                                         s.rdXy, s.rdZ);
+                    Assign((s.t < apex) && (dk > d), d, dk);
+                }
+            }
             Assign(out && (d > zero), s.t, s.t + d);
             const M stopEarly = p.earlyExit ? in : M(false);
             const M last = cone && (s.nCoarse >= F(float(p.coneSteps)));
@@ -432,5 +468,6 @@ using Acm4Kernel = ConeStep<detail::ConeFamily::Acm4>;
 using Acm8Kernel = ConeStep<detail::ConeFamily::Acm8>;
 using CnsKernel = ConeStep<detail::ConeFamily::ConeNormal>;
 using RcnsKernel = ConeStep<detail::ConeFamily::RelaxedNormal>;
+using McnsKernel = ConeStep<detail::ConeFamily::StackedNormal>;
 
 }  // namespace reliefsim

@@ -154,11 +154,16 @@ struct LaneRay {
     F V(const F& t) const { return vEntry + dv * t; }
 };
 
+/// Stacked cones a kernel can read in one fetch (kReadsAllLayers).
+inline constexpr int kMaxStackedCones = 4;
+
 /// What one fetch returns per lane: the depth, and the decoded cone ratio for kernels
-/// that read one (kReadsRatio; unspecified otherwise).
+/// that read one (kReadsRatio; unspecified otherwise). A kernel with `kReadsAllLayers`
+/// gets every layer's value at the point in `stack` (stack[0] == ratio).
 template <class L>
 struct Sample {
     typename L::F h, ratio;
+    std::array<typename L::F, kMaxStackedCones> stack;
 };
 
 /// Whether kernel K reads a cone map with its depths.
@@ -175,6 +180,13 @@ template <class L>
 struct Fetch {
     typename L::F u, v, t;
     typename L::I layer = typename L::I(0);
+};
+
+/// Whether kernel K reads every layer of its map in each fetch (the stacked cones of
+/// mcns) rather than one layer per ray.
+template <class K>
+concept KernelReadsAllLayers = requires {
+    requires K::kReadsAllLayers;
 };
 
 /// The number of cone-map layers kernel K reads (kConeLayers, else 1).

@@ -29,7 +29,7 @@ struct KernelList {
 using KernelTypes =
     KernelList<ParallaxKernel, OffsetLimitKernel, LinearKernel, ReliefKernel,
                SecantKernel, IntervalKernel, PomKernel, CsmKernel, RcsKernel, QcsmKernel,
-               Acm4Kernel, Acm8Kernel, CnsKernel, RcnsKernel>;
+               Acm4Kernel, Acm8Kernel, CnsKernel, RcnsKernel, McnsKernel>;
 
 using MethodInfo = KernelInfo;
 using ParamDef = ParamSpec;

@@ -95,6 +95,8 @@ struct ConeMapParams {
     int stackedCount = 4;   ///< Stacked: number of cones K, in [1, 16]
     bool relaxed = false;   ///< ConeNormal/Stacked: relaxed (Listing 18-2) cones instead
                             ///< of conservative
+    bool normal = false;  ///< Stacked: store n_z of each cone's side normal (dissertation
+                          ///< §3.1, for mcns) instead of its ratio
     bool adaptive =
         false;  ///< Quad/Acm4/Acm8/Cone: 000 Algorithm 1 (never wider than exact)
     float threshold =

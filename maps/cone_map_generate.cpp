@@ -131,13 +131,24 @@ ConeMap SearchMap(const DepthField& hf, ConeKind kind, const ConeMapParams& p,
 ConeMap GenerateConeMapImpl(const DepthField& hf, ConeKind kind, const ConeMapParams& p,
                             Mode mode) {
     ValidateConeMapParams(p);
+    if (p.normal && kind != ConeKind::Stacked)
+        throw Error(
+            "--normal: applies to --kind stacked only (--kind cone-normal stores "
+            "n_z of one cone)");
     switch (kind) {
         case ConeKind::Relaxed:
             return RelaxedListingMap(hf, p, mode == Mode::Brute, kind);
         case ConeKind::ConeNormal:
-        case ConeKind::Stacked:
             if (p.relaxed) return RelaxedListingMap(hf, p, mode == Mode::Brute, kind);
             return SearchMap(hf, kind, p, mode);
+        case ConeKind::Stacked: {
+            ConeMap m = p.relaxed ? RelaxedListingMap(hf, p, mode == Mode::Brute, kind)
+                                  : SearchMap(hf, kind, p, mode);
+            // n_z of each stored (rounded-down) ratio, rounded down again: never wider.
+            if (p.normal)
+                for (float& v : m.values) v = ConeNormalFromRatio(double(v));
+            return m;
+        }
         case ConeKind::MinMip:
         case ConeKind::MaxMip:
             throw Error("--kind " + std::string(ToString(kind)) +

@@ -44,6 +44,7 @@ uint64_t ConeMapCacheKey(const DepthField& hf, ConeKind kind, const ConeMapParam
     h = HashValue(h, p.searchSteps);
     h = HashValue(h, p.stackedCount);
     h = HashValue(h, int(p.relaxed));
+    h = HashValue(h, int(p.normal));
     h = HashValue(h, int(p.adaptive));
     h = HashValue(h, p.threshold);
     h = HashValue(h, p.adaptiveLevels);

@@ -32,15 +32,23 @@ KernelMapSpec KernelConeSpec(const Kernel& kernel) {
 }  // namespace
 
 std::optional<KernelMapSpec> ParseKernelMap(std::string_view name) {
-    constexpr std::string_view kRelaxedFlag = " --relaxed";
     KernelMapSpec spec;
-    if (name.ends_with(kRelaxedFlag)) {
-        spec.params.relaxed = true;
-        name.remove_suffix(kRelaxedFlag.size());
-    }
-    const auto kind = ParseConeKind(name);
+    const size_t space = name.find(' ');
+    const auto kind = ParseConeKind(name.substr(0, space));
     if (!kind) return std::nullopt;
     spec.kind = *kind;
+    std::string_view flags = space == name.npos ? "" : name.substr(space + 1);
+    while (!flags.empty()) {
+        const size_t end = flags.find(' ');
+        const std::string_view flag = flags.substr(0, end);
+        if (flag == "--relaxed")
+            spec.params.relaxed = true;
+        else if (flag == "--normal")
+            spec.params.normal = true;
+        else
+            return std::nullopt;
+        flags = end == flags.npos ? "" : flags.substr(end + 1);
+    }
     return spec;
 }
 

@@ -28,7 +28,8 @@ struct KernelMapSettings {
 };
 
 /// A map as a kernel names it (KernelInfo::maps): a `maps --kind` name, optionally with
-/// " --relaxed" (the cone-normal map of relaxed cones), as `reliefsim maps` makes it.
+/// the flags " --relaxed" (relaxed cones) and " --normal" (stacked cones as n_z), as
+/// `reliefsim maps` makes it.
 struct KernelMapSpec {
     ConeKind kind = ConeKind::Cone;
     ConeMapParams params;

@@ -126,7 +126,19 @@ RS_INLINE void TripPack(const typename K::Params& params, const BatchJob& job,
     using F = typename L::F;
     using M = typename L::M;
     Sample<L> sampled;
-    if constexpr (KernelReadsRatio<K>)
+    if constexpr (KernelReadsAllLayers<K>) {
+        // One fetch of every stacked cone at the point: the layers' (depth, value)
+        // pairs, each a footprint (the twin's texture calls on the layer array).
+        constexpr int kLayers = KernelConeLayers<K>();
+        static_assert(kLayers <= kMaxStackedCones);
+        using I = typename L::I;
+        sampled.h = SampleHeightConeLanes<L>(tex, p.fetch.u, p.fetch.v, I(0), p.active,
+                                             p.texels, sampled.ratio);
+        sampled.stack[0] = sampled.ratio;
+        for (int l = 1; l < kLayers; ++l)
+            SampleHeightConeLanes<L>(tex, p.fetch.u, p.fetch.v, I(l), p.active, p.texels,
+                                     sampled.stack[size_t(l)]);
+    } else if constexpr (KernelReadsRatio<K>)
         sampled.h = SampleHeightConeLanes<L>(tex, p.fetch.u, p.fetch.v, p.fetch.layer,
                                              p.active, p.texels, sampled.ratio);
     else

@@ -2,16 +2,42 @@
 // relaxed cone stepping with its binary search (001 Listing 18-3). One fetch per trip of
 // the combined texture (depth in .r, cone ratio in .g; sampler.glsl SampleHeightCone),
 // the same float operations in the same order as the C++ kernel. Families 5 and 6 (cns,
-// rcns) read n_z of the cone side's normal and step by 004 eq. 3.2.
+// rcns) read n_z of the cone side's normal and step by 004 eq. 3.2; family 7 (mcns) reads
+// the four stacked cones' n_z from the layers of the (depth, n_z) array and keeps the
+// largest step.
 
 uniform int uConeSteps;     // cone steps
 uniform int uRefineSteps;   // binary steps (rcs)
 uniform int uConeStepForm;  // 0: Listing 18-3's step; 1: Alg. 4's unit-ray form
 uniform int uRelaxed;       // 1: rcs
 uniform int uConeFamily;    // kernels/cone_step.h ConeFamily: 2 qcsm, 3 acm4, 4 acm8,
-                            // 5 cns, 6 rcns
+                            // 5 cns, 6 rcns, 7 mcns
 
-const int kFamilyQuad = 2, kFamilyAcm4 = 3, kFamilyAcm8 = 4, kFamilyConeNormal = 5;
+const int kFamilyQuad = 2, kFamilyAcm4 = 3, kFamilyAcm8 = 4, kFamilyConeNormal = 5,
+          kFamilyStacked = 7;
+const int kStackedCones = 4;  // kernels/kernel.h kMaxStackedCones
+
+// The cone step's depth advance (ConeStep::Advance): csm's from the ratio r, or eq. 3.2
+// from n_z (normalForm).
+float Advance(float t, float h, float r, float rayRatio, float rdXy, float rdZ,
+              bool normalForm) {
+    precise float d;
+    if (normalForm) {
+        precise float nXy = sqrt(1.0 - r * r);
+        if (uConeStepForm != 0) {
+            precise float s = ((h - t) * r) / (nXy * rdXy + r * rdZ);
+            d = s * rdZ;
+        } else {
+            d = ((h - t) * r) / (nXy * rayRatio + r);
+        }
+    } else if (uConeStepForm != 0) {
+        precise float s = (h - t) / (rdXy / r + rdZ);
+        d = s * rdZ;
+    } else {
+        d = (r * (h - t)) / (rayRatio + r);
+    }
+    return d;
+}
 
 // ConeLayerOf: the direction class of dirUv, by the same exact comparisons.
 int ConeLayerOf(float du, float dv) {
@@ -57,7 +83,8 @@ MarchResult March(MarchInput ray) {
     bool inside = false;
     int phase = kConePhaseCone;
     int layer = ConeLayerOf(ray.dirUv.x, ray.dirUv.y);
-    bool layered = uConeFamily >= kFamilyQuad && uConeFamily <= kFamilyAcm8;
+    bool stacked = uConeFamily == kFamilyStacked;
+    bool layered = (uConeFamily >= kFamilyQuad && uConeFamily <= kFamilyAcm8) || stacked;
     bool normalForm = uConeFamily >= kFamilyConeNormal;
 
     gUsed = 0u;
@@ -69,26 +96,26 @@ MarchResult March(MarchInput ray) {
                          : SampleHeightCone(At(ray, tq));
         precise float h = x.x;
         precise float r = x.y;
+        precise float stack[kStackedCones];
+        stack[0] = r;
+        if (stacked) {  // the other stacked cones at the same point: K - 1 more calls
+            for (int k = 1; k < kStackedCones; ++k)
+                stack[k] = SampleHeightConeLayer(At(ray, tq), k).y;
+        }
         RS_ON_SAMPLE(tq, At(ray, tq), h);
         bool want = false;
         if (phase == kConePhaseCone) {
             nCoarse = nCoarse + 1;
             bool isIn = t >= h;
             inside = inside || isIn;
-            precise float d;
-            if (normalForm) {  // eq. 3.2; r is n_z
-                precise float nXy = sqrt(1.0 - r * r);
-                if (uConeStepForm != 0) {
-                    precise float s = ((h - t) * r) / (nXy * rdXy + r * rdZ);
-                    d = s * rdZ;
-                } else {
-                    d = ((h - t) * r) / (nXy * rayRatio + r);
+            precise float d = Advance(t, h, r, rayRatio, rdXy, rdZ, normalForm);
+            if (stacked) {
+                for (int k = 1; k < kStackedCones; ++k) {
+                    precise float apex =
+                        h * (float(kStackedCones - k) / float(kStackedCones));
+                    precise float dk = Advance(t, apex, stack[k], rayRatio, rdXy, rdZ, true);
+                    if (t < apex && dk > d) d = dk;
                 }
-            } else if (uConeStepForm != 0) {
-                precise float s = (h - t) / (rdXy / r + rdZ);
-                d = s * rdZ;
-            } else {
-                d = (r * (h - t)) / (rayRatio + r);
             }
             if (!isIn && d > 0.0) t = t + d;
             bool stop = (uEarlyExit && isIn) || nCoarse >= uConeSteps;

@@ -111,6 +111,7 @@ TEST(MapsCli, RelaxedStackedAndConeNormal) {
 
 TEST(MapsCli, RelaxedFlagOnAnotherKind) {
     ExpectCleanFailure("--map builtin:shapes:16 --kind acm4 --relaxed", "--relaxed");
+    ExpectCleanFailure("--map builtin:shapes:16 --kind cone-normal --normal", "--normal");
 }
 
 TEST(MapsCli, CacheMissThenHit) {

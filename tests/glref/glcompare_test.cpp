@@ -246,7 +246,7 @@ TEST(GlCompare, ConeFiltersAreBitIdentical) {
                 ++compared;
             }
     }
-    EXPECT_GE(compared, 7 * 4 * 2);  // csm, rcs, qcsm, acm4, acm8, cns, rcns
+    EXPECT_GE(compared, 8 * 4 * 2);  // csm, rcs, qcsm, acm4, acm8, cns, rcns, mcns
 }
 
 // The orthographic texture-space view: every kernel, float and 8-bit, a slanted and a

@@ -206,6 +206,32 @@ TEST(ConeMap, RelaxedVariantsMatchTheirBruteForce) {
     }
 }
 
+TEST(ConeMap, StackedNormalIsNzOfEachStackedCone) {
+    // --normal stores n_z = r / sqrt(1 + r^2) of each stacked cone (1 when unbounded),
+    // rounded down: never wider than the ratio it comes from; fast equals brute force.
+    const DepthField hf = MakeBuiltinMap("shapes", 32, 32);
+    ConeMapParams p;
+    const ConeMap ratios = GenerateConeMap(hf, ConeKind::Stacked, p);
+    p.normal = true;
+    const ConeMap normals = GenerateConeMap(hf, ConeKind::Stacked, p);
+    ExpectBitEqual(normals, GenerateConeMapBruteForce(hf, ConeKind::Stacked, p),
+                   "stacked --normal");
+    ASSERT_EQ(normals.values.size(), ratios.values.size());
+    size_t unbounded = 0;
+    for (size_t i = 0; i < ratios.values.size(); ++i) {
+        const double r = ratios.values[i], n = normals.values[i];
+        if (r >= double(kConeRatioCap)) {
+            EXPECT_EQ(n, 1.0) << i;
+            ++unbounded;
+            continue;
+        }
+        EXPECT_LE(n, r / std::sqrt(1.0 + r * r)) << i;
+        EXPECT_NEAR(n, r / std::sqrt(1.0 + r * r), 1e-6) << i;
+    }
+    EXPECT_GT(unbounded, 0u);  // the highest cones of the tallest texels
+    EXPECT_THROW(GenerateConeMap(hf, ConeKind::Cone, p), Error);  // stacked only
+}
+
 TEST(ConeMap, RelaxedSearchWithoutExitFieldMatchesBruteForce) {
     // Large maps with many steps (e.g. > 2040 texels a side at 4096 steps) search without
     // the exit-field bound; the same code path, forced on small maps.
