@@ -60,10 +60,7 @@ void PrintTrace(const GlCompareArgs& a, const DepthField& field, int x, int y) {
     GlReference gl(s.threads > 0 ? s.threads : -1);
     GlScene scene = MakeGlScene(s);
     scene.measureLanes = false;
-    // The cone channel exactly as the C++ frame bound it.
-    const Textures textures = BindKernelTextures(field, s.sampler, scene.kernel, s.maps);
-    scene.cone = textures.cone;
-    scene.coneSquared = textures.coneSquared;
+    BindSceneMaps(scene, field, s);  // the cone channel exactly as the C++ frame's
     scene.traceX = x;
     scene.traceY = y;
     GlFrame g = gl.Render(field, scene);
@@ -214,6 +211,13 @@ GlScene MakeGlScene(const RenderSettings& s) {
     return g;
 }
 
+Textures BindSceneMaps(GlScene& scene, const DepthField& field, const RenderSettings& s) {
+    Textures textures = BindKernelTextures(field, s.sampler, scene.kernel, s.maps);
+    scene.cone = textures.cone;
+    scene.coneSquared = textures.coneSquared;
+    return textures;
+}
+
 std::vector<int16_t> SceneTriangles(const RenderSettings& s) {
     const Camera camera = SceneCamera(s);
     return TrianglePerPixel(ClipMeshToViewport(MakePlane(s.tiling), camera.clipFromWorld),
@@ -230,10 +234,7 @@ GlCompareResult RunGlCompare(const DepthField& field, const RenderSettings& s,
     // it.
     GlScene scene = MakeGlScene(s);
     scene.measureLanes = false;
-    // The cone channel exactly as the C++ frame bound it.
-    const Textures textures = BindKernelTextures(field, s.sampler, scene.kernel, s.maps);
-    scene.cone = textures.cone;
-    scene.coneSquared = textures.coneSquared;
+    const Textures textures = BindSceneMaps(scene, field, s);  // as the C++ frame's
     r.gl = gl.Render(field, scene);
     r.renderer = gl.Renderer();
     r.comparison = CompareRecords(r.cpu.record, r.gl.record);

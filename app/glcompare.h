@@ -18,6 +18,12 @@ namespace reliefsim {
 /// Error).
 GlScene MakeGlScene(const RenderSettings& settings);
 
+/// Binds the kernel's textures over `field` exactly as Render() binds them (maps
+/// generated or read with --cone-map, encoded, through the cache) and hands the cone
+/// channel to `scene` (GlScene::cone); returns the textures.
+Textures BindSceneMaps(GlScene& scene, const DepthField& field,
+                       const RenderSettings& settings);
+
 /// The C++ triangle index of each pixel (see TrianglePerPixel) for the settings' scene.
 std::vector<int16_t> SceneTriangles(const RenderSettings& settings);
 

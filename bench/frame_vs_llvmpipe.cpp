@@ -70,6 +70,7 @@ int Run(int argc, char** argv) {
     GlReference gl(threads);
     GlScene scene = MakeGlScene(s);
     scene.measureLanes = false;
+    BindSceneMaps(scene, field, s);  // the cone kernels' maps, as Render() binds them
     gl.Prepare(field, scene);
     for (int k = 0; k < 3; ++k) gl.DrawAndFinish();  // JIT + warm caches
     std::vector<double> glMs;
