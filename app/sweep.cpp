@@ -154,27 +154,34 @@ MapEntry ParseMap(const ojson& m, const std::string& where) {
     return e;
 }
 
+/// A value of a method's "set": a number or, for a parameter with named choices
+/// (`refine`, `cone_filter`), a name; ResolveParams validates both.
+ojson SetValue(const ojson& v, const std::string& where) {
+    if (v.is_string()) return v;
+    return Number(v, where);
+}
+
 /// The crossed values of a method's "set": every combination, the last key fastest.
-std::vector<std::vector<std::pair<std::string, double>>> CrossSet(
+std::vector<std::vector<std::pair<std::string, ojson>>> CrossSet(
     const ojson& set, const std::string& where) {
-    std::vector<std::vector<std::pair<std::string, double>>> combos = {{}};
+    std::vector<std::vector<std::pair<std::string, ojson>>> combos = {{}};
     if (set.is_null()) return combos;
     if (!set.is_object()) Bad(where, "expected an object of key: value or [values]");
     for (const auto& [key, value] : set.items()) {
         const std::string at = where + " \"" + key + "\"";
-        std::vector<double> values;
+        std::vector<ojson> values;
         if (value.is_array()) {
             if (value.empty()) Bad(at, "an empty list");
-            for (const ojson& x : value) values.push_back(Number(x, at));
+            for (const ojson& x : value) values.push_back(SetValue(x, at));
         } else {
-            values.push_back(Number(value, at));
+            values.push_back(SetValue(value, at));
         }
         if (combos.size() * values.size() > kMaxConfigurations)
             Bad(at, "the crossed lists give more than " +
                         std::to_string(kMaxConfigurations) + " configurations");
-        std::vector<std::vector<std::pair<std::string, double>>> next;
+        std::vector<std::vector<std::pair<std::string, ojson>>> next;
         for (const auto& c : combos)
-            for (double x : values) {
+            for (const ojson& x : values) {
                 auto d = c;
                 d.emplace_back(key, x);
                 next.push_back(std::move(d));
@@ -372,7 +379,14 @@ std::vector<SweepConfig> ParseSweepConfig(const std::string& text,
                     c.columns["map_stores"] = c.mapStores;
                     c.columns["view"] = int(vi);
                     c.columns["method"] = method;
-                    for (const auto& [k, x] : combo) {
+                    for (const auto& [k, value] : combo) {
+                        if (value.is_string()) {
+                            const std::string name = value.get<std::string>();
+                            c.settings.set.push_back(k + "=" + name);
+                            c.columns["set." + k] = name;
+                            continue;
+                        }
+                        const double x = value.get<double>();
                         c.settings.set.push_back(k + "=" + SetValueText(x));
                         if (std::abs(x) < 1e15 && x == double(int64_t(x)))
                             c.columns["set." + k] = int64_t(x);
@@ -451,7 +465,8 @@ std::string SweepTables(const std::vector<ojson>& rows) {
         std::string steps;
         for (const auto& [k, v] : c.items())
             if (k.rfind("set.", 0) == 0)
-                steps += (steps.empty() ? "" : ", ") + k.substr(4) + "=" + v.dump();
+                steps += (steps.empty() ? "" : ", ") + k.substr(4) + "=" +
+                         (v.is_string() ? v.get<std::string>() : v.dump());
         char line[256];
         auto num = [&](const char* key) {
             return m.contains(key) && m[key].is_number() ? m[key].get<double>() : 0.0;

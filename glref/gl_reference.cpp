@@ -285,6 +285,7 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
             "// ---- trace_probe.glsl\n" + std::string(EmbeddedGlsl("trace_probe.glsl"));
     fs +=
         "// ---- kernel_common.glsl\n" + std::string(EmbeddedGlsl("kernel_common.glsl"));
+    fs += "// ---- refine.glsl\n" + std::string(EmbeddedGlsl("refine.glsl"));
     fs += "// ---- " + std::string(scene.kernel.Info().glslFile) + "\n" +
           std::string(EmbeddedGlsl(scene.kernel.Info().glslFile));
     fs += "// ---- record_main.glsl\n" + std::string(EmbeddedGlsl("record_main.glsl"));

@@ -36,6 +36,17 @@
 // the relaxed loop at the first point inside (the binary search then starts there).
 // `hit` is whether the relaxed loop reached a point inside.
 //
+// Refinement (`--set refine=none|binary|interval|secant|pom`, kernels/refine.h; default
+// none, binary for rcs and rcns). The cone loop keeps the bracket: the last point it
+// sampled outside (tAbove, hAbove) and the first it sampled inside (tBelow, hBelow),
+// else K, the point where it ended. binary: rcs and rcns run Listing 18-3's search
+// between H = tK / 2 and K (above), whether or not K is inside; the other cone kernels
+// run Alg. 2 back from K over the last cone step (the dissertation adds binary steps
+// after CSM, 004 §4.3.1, Tables 4.9-4.13). interval, secant, pom need the depth at both
+// bracket ends: a loop that ended outside fetches K once more (as the linear search
+// fetches the bottom) and refines only if K is inside; else K is the answer. A hit at
+// the first sample is exact (no refinement), except in rcs's listing search.
+//
 // qcsm, acm4, acm8 (directional cones: QDCSM in 001 §18.1 and 004 §4.3.2; ACM in 000
 // §II-B): csm's step with the ratio "indexed by the viewing direction" (000 §II-B). The
 // maps hold one ratio per direction class (maps/cone_map.h: quad = the half planes +x,
@@ -87,6 +98,7 @@
 #include <cmath>
 
 #include "kernels/kernel.h"
+#include "kernels/refine.h"
 
 namespace reliefsim {
 
@@ -106,6 +118,16 @@ inline constexpr ParamSpec kConeStepForm = {
     "form",
     "uConeStepForm"};
 inline constexpr std::array<std::string_view, 1> kConeMaps = {"cone"};
+// The dissertation follows its cone searches with 5 binary steps (004 Tables 4.9-4.13).
+inline constexpr std::array<ParamSpec, 8> kConeParams = {
+    ConeSteps(15),
+    RefineParam(Refinement::None),
+    RefineSteps(5, "refinement iterations after the cone steps"),
+    kSecantTolerance,
+    kConeStepForm,
+    kConeFilterParam,
+    kEarlyExitParam,
+    kBudgetParam};
 inline constexpr std::array<std::string_view, 1> kRelaxedMaps = {"relaxed"};
 
 /// The cone kernels of one source: the step is csm's, the map and its reading differ.
@@ -128,8 +150,7 @@ struct ConeStepPreset<ConeFamily::Conservative> {
                                       kSource =
                                           "Burger 2018 (004) Alg. 4; Dummer 2006; Chen & "
                                           "Chuang 2009 (000) §II-A";
-    static constexpr std::array<ParamSpec, 5> kParams = {
-        ConeSteps(15), kConeStepForm, kConeFilterParam, kEarlyExitParam, kBudgetParam};
+    static constexpr auto& kParams = kConeParams;
     static constexpr auto& kMaps = kConeMaps;
     static constexpr std::string_view kEncoding = "u8sqrt";  // Dummer; 004 §2.4
 };
@@ -147,9 +168,11 @@ struct ConeStepPreset<ConeFamily::Relaxed> {
         kName = "rcs",
         kTitle = "relaxed cone stepping + binary search",
         kSource = "Policarpo & Oliveira, GPU Gems 3 ch. 18 (001) Listing 18-3";
-    static constexpr std::array<ParamSpec, 6> kParams = {
+    static constexpr std::array<ParamSpec, 8> kParams = {
         ConeSteps(15),
-        {"refine_steps", 6, 0, 64, true, "binary-search steps", "uRefineSteps"},
+        RefineParam(Refinement::Binary),
+        RefineSteps(6, "refinement iterations (Listing 18-3: binary_steps = 6)"),
+        kSecantTolerance,
         kConeStepForm,
         kConeFilterParam,
         kEarlyExitFixed,
@@ -160,8 +183,7 @@ struct ConeStepPreset<ConeFamily::Relaxed> {
 inline constexpr std::array<std::string_view, 1> kQuadMaps = {"quad"};
 inline constexpr std::array<std::string_view, 1> kAcm4Maps = {"acm4"};
 inline constexpr std::array<std::string_view, 1> kAcm8Maps = {"acm8"};
-inline constexpr std::array<ParamSpec, 5> kDirectionalParams = {
-    ConeSteps(15), kConeStepForm, kConeFilterParam, kEarlyExitParam, kBudgetParam};
+inline constexpr auto& kDirectionalParams = kConeParams;
 template <>
 struct ConeStepPreset<ConeFamily::Quad> {
     static constexpr std::string_view
@@ -303,7 +325,9 @@ struct ConeStep {
 
     struct Params {
         int coneSteps = 15;
+        Refinement refine = Refinement::None;
         int refineSteps = 0;
+        float secantTolerance = 0.01f;
         bool unitRayForm = false;
         bool earlyExit = true;
     };
@@ -313,13 +337,15 @@ struct ConeStep {
         };
         Params p;
         p.coneSteps = int(get("cone_steps"));
+        p.refine = Refinement(int(get("refine")));
         p.refineSteps = int(get("refine_steps"));
+        p.secantTolerance = float(get("secant_tolerance"));
         p.unitRayForm = get("cone_step") != 0.0;
         p.earlyExit = get("early_exit") != 0.0;
         return p;
     }
 
-    enum Phase { kCone = 0, kRefine = 1, kDone = 2 };
+    enum Phase { kCone = 0, kBottom = 1, kRefine = 2, kDone = 3 };
 
     template <class L>
     struct State {
@@ -328,9 +354,13 @@ struct ConeStep {
         F rayRatio;          // |dirUv| (Listing 18-3's ray_ratio)
         F rdXy, rdZ;         // Alg. 4's |rd_xy| and rd_z
         F nCoarse, nRefine;  // the loops' counters
-        F tb, range;         // binary search (rcs)
+        F tAbove, hAbove;    // the last point sampled outside
+        F tBelow, hBelow;    // the first point sampled inside (or where the loop ended)
+        Refiner<L> q;
+        F tResult;  // the point returned if the lane stops now (after the cone loop)
         F phase;
-        typename L::M inside;  // the cone loop reached a point inside
+        typename L::M inside;     // the cone loop reached a point inside
+        typename L::M haveAbove;  // it sampled a point outside
     };
 
     template <class L>
@@ -338,7 +368,10 @@ struct ConeStep {
                       Fetch<L>& first) {
         using F = typename L::F;
         const F zero(0.0f);
-        s.t = s.nCoarse = s.nRefine = s.tb = s.range = zero;
+        s.t = s.nCoarse = s.nRefine = zero;
+        s.tAbove = s.hAbove = s.tBelow = s.hBelow = s.tResult = zero;
+        s.q.Clear();
+        s.haveAbove = typename L::M(false);
         const F sq = ray.du * ray.du + ray.dv * ray.dv;
         s.rayRatio = stdx::sqrt(sq);
         const F len = stdx::sqrt(sq + F(1.0f));
@@ -381,17 +414,25 @@ struct ConeStep {
         using F = typename L::F;
         using M = typename L::M;
         const F one(1.0f), zero(0.0f);
-        M want(false);
-        F tq = next.t;
+        const Refinement rf = p.refine;
+        M want(false), startRefine(false), refineNext(false);
+        F tq = next.t, segment = zero;
         const M cone = active && (s.phase == F(float(kCone)));
+        const M bottom = active && (s.phase == F(float(kBottom)));
         const M refine = active && (s.phase == F(float(kRefine)));
         if (Any(cone)) {
             Assign(cone, s.nCoarse, s.nCoarse + one);
             const M in = cone && (s.t >= x.h);
+            const M firstIn = in && !s.inside;
+            Assign(firstIn, s.tBelow, s.t);
+            Assign(firstIn, s.hBelow, x.h);
             s.inside = s.inside || in;
             // Outside: step along the cone (r = 0 advances nothing: the ray stalls, as
             // the method does at a zero ratio). Inside: stay (saturate(D - t) = 0).
             const M out = cone && !in;
+            Assign(out, s.tAbove, s.t);
+            Assign(out, s.hAbove, x.h);
+            s.haveAbove = s.haveAbove || out;
             // (x.h - t) > 0 where out; the advance is computed on every lane and kept
             // where out, so a lane inside never divides by a zero ratio's result.
             F d = Advance(p, s.t, x.h, x.ratio, s.rayRatio, s.rdXy, s.rdZ);
@@ -412,31 +453,51 @@ struct ConeStep {
             const M more = cone && !stop;
             Assign(more, tq, s.t);
             want = want || more;
-            if constexpr (kRelaxed) {
-                // The binary search between H (tK / 2) and K (tK).
-                Assign(stop, s.range, s.t * F(0.5f));
-                Assign(stop, s.tb, s.t * F(0.5f));
-                const M go = stop && (F(float(p.refineSteps)) > zero);
+            if (Any(stop)) {
+                // The bracket's inner end: the first point inside, else where the loop
+                // ended (not sampled).
+                Assign(stop && !s.inside, s.tBelow, s.t);
+                Assign(stop, s.tResult, s.t);
                 Assign(stop, s.phase, F(float(kDone)));
-                Assign(go, s.phase, F(float(kRefine)));
-                Assign(go, tq, s.tb);
-                want = want || go;
-            } else {
-                Assign(stop, s.phase, F(float(kDone)));
+                if (rf == Refinement::Binary) {
+                    // rcs: Listing 18-3's search between H = tK / 2 and K, run whether
+                    // or not K is inside. The others: Alg. 2 back from K over the last
+                    // cone step (a hit at the first sample is exact).
+                    startRefine = kRelaxed ? stop : stop && s.haveAbove;
+                    segment = kRelaxed ? s.tBelow : s.tBelow - s.tAbove;
+                } else if (rf != Refinement::None) {
+                    // The chord needs the depth at both ends: fetch K when the loop
+                    // ended outside (a conservative search ends short of the surface).
+                    startRefine = stop && s.inside && s.haveAbove;
+                    const M fetchEnd = stop && !s.inside;
+                    Assign(fetchEnd, tq, s.t);
+                    Assign(fetchEnd, s.phase, F(float(kBottom)));
+                    want = want || fetchEnd;
+                }
             }
         }
-        if constexpr (kRelaxed) {
-            if (Any(refine)) {
-                Assign(refine, s.nRefine, s.nRefine + one);
-                Assign(refine, s.range, s.range * F(0.5f));
-                const M outside = refine && (s.tb < x.h);
-                Assign(outside, s.tb, s.tb + s.range);
-                Assign(refine && !outside, s.tb, s.tb - s.range);
-                const M more = refine && (s.nRefine < F(float(p.refineSteps)));
-                Assign(refine && !more, s.phase, F(float(kDone)));
-                Assign(more, tq, s.tb);
-                want = want || more;
-            }
+        if (Any(bottom)) {  // K sampled: refine if it is inside, else K is the answer
+            const M cross = bottom && (s.t >= x.h);
+            Assign(cross, s.hBelow, x.h);
+            Assign(bottom, s.phase, F(float(kDone)));
+            startRefine = startRefine || cross;
+        }
+        if (Any(refine)) {  // consume a refinement sample
+            Assign(refine, s.nRefine, s.nRefine + one);
+            s.q.Consume(rf, refine, x.h, p.secantTolerance);
+            refineNext = refine;
+        }
+        if (Any(startRefine)) {
+            const M loop = s.q.Start(rf, startRefine, s.tAbove, s.hAbove, s.tBelow,
+                                     s.hBelow, segment, s.tResult, s.nRefine);
+            refineNext = refineNext || loop;
+        }
+        if (Any(refineNext)) {  // the top of the refinement loop
+            Assign(refineNext, s.phase, F(float(kDone)));
+            const M go = s.q.Next(rf, refineNext, s.nRefine, p.refineSteps, p.earlyExit,
+                                  s.tResult, tq);
+            Assign(go, s.phase, F(float(kRefine)));
+            want = want || go;
         }
         next.t = tq;
         next.u = ray.U(tq);
@@ -448,10 +509,9 @@ struct ConeStep {
     static void End(const Params&, const LaneRay<L>& ray, const State<L>& s,
                     LaneOutcome<L>& out) {
         using F = typename L::F;
-        // A lane stopped in the cone loop (by the budget, or csm at its end) answers its
-        // current point; rcs after (or during) the binary search answers tb.
-        F tResult = s.t;
-        if constexpr (kRelaxed) tResult = Select(s.phase == F(float(kCone)), s.t, s.tb);
+        // A lane the budget stopped in the cone loop answers its current point; after
+        // it, the point the refinement (if any) answers.
+        const F tResult = Select(s.phase == F(float(kCone)), s.t, s.tResult);
         out.u = ray.U(tResult);
         out.v = ray.V(tResult);
         out.depth = tResult;

@@ -1,7 +1,8 @@
-// Linear search (dissertation Alg. 1) followed by a refinement: none, binary (Alg. 2,
-// Policarpo relief mapping), interval (Alg. 3), iterated secant (Risser et al. 2007,
-// listing), or one secant step without a fetch (Tatarchuk's parallax occlusion mapping).
-// Five methods, one source: LinearSearch<R> for each Refinement R.
+// Linear search (dissertation Alg. 1) followed by a refinement (kernels/refine.h): none,
+// binary (Alg. 2, Policarpo relief mapping), interval (Alg. 3), iterated secant (Risser
+// et al. 2007, listing), or one secant step without a fetch (Tatarchuk's parallax
+// occlusion mapping). Five methods, one source: LinearSearch<R> is the preset whose
+// default `refine` is R; every preset takes every refinement (`--set refine=...`).
 //
 // Conventions (DESIGN.md): p(t) = (uvEntry + t * dirUv, t); the ray is inside the relief
 // where t >= depth(uv).
@@ -12,17 +13,15 @@
 //
 // Where the papers are ambiguous, this file decides (docs/kernels.md explains each):
 //  * Alg. 2 as printed flips the sign of s twice when two consecutive points are below
-//  the
-//    surface; the step is applied as a magnitude: t -= |s|/2 when below, t += |s|/2 when
-//    above (what Policarpo's shader does).
+//    the surface; the step is applied as a magnitude: t -= |s|/2 when below, t += |s|/2
+//    when above (what Policarpo's shader does). Its step is the linear step.
 //  * Alg. 3 as printed assigns a point below the surface to p1, the point "before" the
 //    intersection; here the new point replaces the bracket end on its own side.
-//  * Refinements reuse the two samples the linear search already took around the crossing
-//    (as the POM and secant listings do); only when the linear search found no hit is the
-//    bracket's lower end (t = 1, the bottom) fetched.
+//  * Refinements reuse the two samples the linear search already took around the
+//    crossing (as the POM and secant listings do); only when the linear search found no
+//    hit is the bracket's lower end (t = 1, the bottom) fetched.
 //  * A hit at the very first sample (t = 0) is exact (the surface is at the top there),
-//  so
-//    no refinement runs.
+//    so no refinement runs.
 //  * early_exit = false runs every loop for its full count, as a GPU with uniform control
 //    flow would, with the result latched at the point where the break would have
 //    happened.
@@ -33,29 +32,18 @@
 #include <cstdint>
 
 #include "kernels/kernel.h"
+#include "kernels/refine.h"
 
 namespace reliefsim {
-
-enum class Refinement { None, Binary, Interval, Secant, Pom };
 
 namespace detail {
 
 inline constexpr ParamSpec kLinearSteps = {
     "linear_steps", 32, 1, 1024, true, "linear-search steps over the full depth",
     "uLinearSteps"};
-inline constexpr ParamSpec RefineSteps(double def, std::string_view help) {
-    return {"refine_steps", def, 0, 64, true, help, "uRefineSteps"};
-}
-inline constexpr ParamSpec kSecantTolerance = {
-    "secant_tolerance",
-    0.01,
-    0,
-    1,
-    false,
-    "stop when |sampled depth - ray depth| <= this",
-    "uSecantTolerance"};
 
-/// The catalogue entries of the five presets (name, title, source, parameters).
+/// The catalogue entries of the five presets (name, title, source, default refinement).
+/// Every preset takes every refinement (`refine`); they differ in their defaults.
 template <Refinement R>
 struct LinearSearchPreset;
 template <>
@@ -63,8 +51,7 @@ struct LinearSearchPreset<Refinement::None> {
     static constexpr std::string_view kName = "linear",
                                       kTitle = "linear search (steep parallax mapping)",
                                       kSource = "Burger 2018 (004) Alg. 1; McGuire 2005";
-    static constexpr std::array<ParamSpec, 3> kParams = {kLinearSteps, kEarlyExitParam,
-                                                         kBudgetParam};
+    static constexpr double kRefineSteps = 6;
 };
 template <>
 struct LinearSearchPreset<Refinement::Binary> {
@@ -72,9 +59,7 @@ struct LinearSearchPreset<Refinement::Binary> {
         kName = "relief",
         kTitle = "linear search + binary search (relief mapping)",
         kSource = "Burger 2018 (004) Alg. 1 + Alg. 2; Policarpo & Oliveira (001)";
-    static constexpr std::array<ParamSpec, 4> kParams = {
-        kLinearSteps, RefineSteps(6, "binary-search steps"), kEarlyExitParam,
-        kBudgetParam};
+    static constexpr double kRefineSteps = 6;
 };
 template <>
 struct LinearSearchPreset<Refinement::Secant> {
@@ -82,9 +67,7 @@ struct LinearSearchPreset<Refinement::Secant> {
         kName = "secant",
         kTitle = "linear search + iterated secant",
         kSource = "Risser, Shah & Pattanaik 2007 (003) section 3 and listing";
-    static constexpr std::array<ParamSpec, 5> kParams = {
-        kLinearSteps, RefineSteps(10, "secant iterations (at most)"), kSecantTolerance,
-        kEarlyExitParam, kBudgetParam};
+    static constexpr double kRefineSteps = 10;
 };
 template <>
 struct LinearSearchPreset<Refinement::Interval> {
@@ -92,9 +75,7 @@ struct LinearSearchPreset<Refinement::Interval> {
         kName = "interval",
         kTitle = "linear search + interval search",
         kSource = "Burger 2018 (004) Alg. 1 + Alg. 3; Risser et al. interval mapping";
-    static constexpr std::array<ParamSpec, 4> kParams = {
-        kLinearSteps, RefineSteps(6, "interval-search steps"), kEarlyExitParam,
-        kBudgetParam};
+    static constexpr double kRefineSteps = 6;
 };
 template <>
 struct LinearSearchPreset<Refinement::Pom> {
@@ -102,42 +83,50 @@ struct LinearSearchPreset<Refinement::Pom> {
         kName = "pom",
         kTitle = "linear search + one secant step (parallax occlusion mapping)",
         kSource = "Tatarchuk 2006, as described in Risser et al. 2007 (003) section 2";
-    static constexpr std::array<ParamSpec, 3> kParams = {kLinearSteps, kEarlyExitParam,
-                                                         kBudgetParam};
+    static constexpr double kRefineSteps = 6;
 };
+
+template <Refinement R>
+inline constexpr std::array<ParamSpec, 6> kLinearSearchParams = {
+    kLinearSteps,
+    RefineParam(R),
+    RefineSteps(LinearSearchPreset<R>::kRefineSteps,
+                "refinement iterations (secant: at most; pom: none)"),
+    kSecantTolerance,
+    kEarlyExitParam,
+    kBudgetParam};
 
 }  // namespace detail
 
 template <Refinement R>
 struct LinearSearch {
     using Preset = detail::LinearSearchPreset<R>;
-    static constexpr std::array<GlslConstant, 1> kGlslConstants = {
-        GlslConstant{"uRefinement", int(R)}};
+    static constexpr auto& kParams = detail::kLinearSearchParams<R>;
 
     static const KernelInfo& Info() {
         static const KernelInfo info{Preset::kName,
                                      Preset::kTitle,
                                      Preset::kSource,
-                                     Preset::kParams,
+                                     kParams,
                                      {},
                                      "linear_search.glsl",
-                                     kGlslConstants,
+                                     {},
                                      ""};
         return info;
     }
 
     struct Params {
         int linearSteps = 32;   ///< coarse steps over t in [0,1]; step = 1/linearSteps
+        Refinement refine = R;  ///< the refinement after the linear search
         int refineSteps = 0;    ///< refinement iterations (ignored by None and Pom)
         bool earlyExit = true;  ///< break out of loops (false: GPU-style fixed loops)
         float secantTolerance = 0.01f;  ///< Risser's |h - z| stop test (listing: 0.01)
     };
     static Params FromValues(const ParamValues& v) {
         Params p;
-        auto get = [&](std::string_view name) {
-            return ParamValue(v, Preset::kParams, name);
-        };
+        auto get = [&](std::string_view name) { return ParamValue(v, kParams, name); };
         p.linearSteps = int(get("linear_steps"));
+        p.refine = Refinement(int(get("refine")));
         p.refineSteps = int(get("refine_steps"));
         p.earlyExit = get("early_exit") != 0.0;
         p.secantTolerance = float(get("secant_tolerance"));
@@ -155,24 +144,10 @@ struct LinearSearch {
         // The loop counters of Alg. 1-3 are the iteration counts: the coarse loop's i
         // equals nCoarse whenever it is tested, the refinement loop's k equals nRefine.
         F nCoarse, nRefine;
-        F s, tb;           // binary search
-        F t1, h1, t2, h2;  // interval / secant bracket
-        F tInt, best;      // interval and secant points
-        M converged;       // secant stop test met
-        F tResult;         // the point returned if the lane stops now
+        Refiner<L> q;
+        F tResult;  // the point returned if the lane stops now
         F phase;
     };
-
-    /// Where the ray meets the line through the two surface samples (t1, h1) above and
-    /// (t2, h2) below: t1 + f (t2 - t1), f = (h1 - t1) / ((t2 - t1) - (h2 - h1)) (Alg. 3;
-    /// Risser eq. 6-7 in ray parameters). f is clamped to [0,1] against rounding.
-    template <class F>
-    static F SecantPoint(const F& t1, const F& h1, const F& t2, const F& h2) {
-        const F denom = (t2 - t1) - (h2 - h1);
-        F f = Select(denom > F(0.0f), (h1 - t1) / denom, F(1.0f));
-        f = Select(f < F(0.0f), F(0.0f), Select(f > F(1.0f), F(1.0f), f));
-        return f * (t2 - t1) + t1;
-    }
 
     template <class L>
     static void Begin(const Params&, const LaneRay<L>& ray, State<L>& s,
@@ -181,9 +156,9 @@ struct LinearSearch {
         using M = typename L::M;
         const F zero(0.0f);
         s.t = s.tAbove = s.hAbove = s.tBelow = s.hBelow = zero;
-        s.haveAbove = s.found = s.converged = M(false);
-        s.nCoarse = s.nRefine = zero;
-        s.s = s.tb = s.t1 = s.h1 = s.t2 = s.h2 = s.tInt = s.best = s.tResult = zero;
+        s.haveAbove = s.found = M(false);
+        s.nCoarse = s.nRefine = s.tResult = zero;
+        s.q.Clear();
         s.phase = F(float(kCoarse));
         first.t = zero;
         first.u = ray.U(zero);
@@ -199,6 +174,7 @@ struct LinearSearch {
         using M = typename L::M;
         const F one(1.0f);
         const F stepSize = one / F(float(p.linearSteps));
+        const Refinement r = p.refine;
         M startRefine(false), refineNext(false), want(false);
         F tq = next.t;
         // The phase each lane was in when it fetched (a lane changes phase at most once
@@ -234,9 +210,9 @@ struct LinearSearch {
                        s.t);  // the bottom, after linearSteps steps
                 Assign(stop, s.tResult, s.tBelow);
                 Assign(stop, s.phase, F(float(kDone)));
-                if constexpr (R != Refinement::None) {
+                if (r != Refinement::None) {
                     const M refine = stop && s.haveAbove;
-                    if constexpr (R == Refinement::Binary) {
+                    if (r == Refinement::Binary) {
                         startRefine = refine;
                     } else {
                         const M bottom =
@@ -249,76 +225,27 @@ struct LinearSearch {
                 }
             }
         }
-        if constexpr (R != Refinement::None && R != Refinement::Binary) {
+        if (Any(inBottom)) {  // never with none or binary
             Assign(inBottom, s.hBelow, h);
             startRefine = startRefine || inBottom;
         }
-        if constexpr (R != Refinement::None && R != Refinement::Pom) {
-            // Consume a refinement sample.
-            const M refine = inRefine;
-            if (Any(refine)) {
-                Assign(refine, s.nRefine, s.nRefine + one);
-                if constexpr (R == Refinement::Binary) {
-                    Assign(refine, s.s, s.s * F(0.5f));
-                    Assign(refine, s.tb, Select(s.tb >= h, s.tb - s.s, s.tb + s.s));
-                } else if constexpr (R == Refinement::Interval) {
-                    Narrow(refine, s.tInt, h, s);
-                } else {  // Secant
-                    const M open = refine && !s.converged;
-                    Narrow(open, s.tInt, h, s);
-                    Assign(open, s.best, h);
-                    s.converged =
-                        s.converged ||
-                        (open && (stdx::abs(h - s.tInt) <= F(p.secantTolerance)));
-                }
-                refineNext = refine;
-            }
+        if (Any(inRefine)) {  // consume a refinement sample
+            Assign(inRefine, s.nRefine, s.nRefine + one);
+            s.q.Consume(r, inRefine, h, p.secantTolerance);
+            refineNext = inRefine;
         }
-        if constexpr (R != Refinement::None) {
-            if (Any(startRefine)) {
-                if constexpr (R == Refinement::Binary) {
-                    Assign(startRefine, s.s, stepSize * F(0.5f));
-                    Assign(startRefine, s.tb, s.tBelow - s.s);
-                    refineNext = refineNext || startRefine;
-                } else if constexpr (R == Refinement::Pom) {
-                    Assign(startRefine, s.tResult,
-                           SecantPoint(s.tAbove, s.hAbove, s.tBelow, s.hBelow));
-                    Assign(startRefine, s.nRefine, one);
-                    Assign(startRefine, s.phase, F(float(kDone)));
-                } else {
-                    Assign(startRefine, s.t1, s.tAbove);
-                    Assign(startRefine, s.h1, s.hAbove);
-                    Assign(startRefine, s.t2, s.tBelow);
-                    Assign(startRefine, s.h2, s.hBelow);
-                    Assign(startRefine, s.tInt, s.t2);
-                    Assign(startRefine, s.best, s.t2);
-                    s.converged = s.converged && !startRefine;
-                    refineNext = refineNext || startRefine;
-                }
-            }
+        if (Any(startRefine)) {
+            const M loop = s.q.Start(r, startRefine, s.tAbove, s.hAbove, s.tBelow,
+                                     s.hBelow, stepSize, s.tResult, s.nRefine);
+            Assign(startRefine, s.phase, F(float(kDone)));
+            refineNext = refineNext || loop;
         }
-        if constexpr (R != Refinement::None && R != Refinement::Pom) {
-            // The top of the refinement loop.
-            if (Any(refineNext)) {
-                Assign(refineNext, s.phase, F(float(kDone)));
-                M go = refineNext && (s.nRefine < F(float(p.refineSteps)));
-                if constexpr (R == Refinement::Binary) {
-                    Assign(refineNext, s.tResult, s.tb);
-                    Assign(go, tq, s.tb);
-                } else if constexpr (R == Refinement::Interval) {
-                    Assign(refineNext, s.tResult, s.tInt);
-                    Assign(go, s.tInt, SecantPoint(s.t1, s.h1, s.t2, s.h2));
-                    Assign(go, s.tResult, s.tInt);
-                    Assign(go, tq, s.tInt);
-                } else {  // Secant
-                    Assign(refineNext, s.tResult, s.best);
-                    if (p.earlyExit) go = go && !s.converged;
-                    Assign(go, s.tInt, SecantPoint(s.t1, s.h1, s.t2, s.h2));
-                    Assign(go, tq, s.tInt);
-                }
-                Assign(go, s.phase, F(float(kRefine)));
-                want = want || go;
-            }
+        if (Any(refineNext)) {  // the top of the refinement loop
+            Assign(refineNext, s.phase, F(float(kDone)));
+            const M go = s.q.Next(r, refineNext, s.nRefine, p.refineSteps, p.earlyExit,
+                                  s.tResult, tq);
+            Assign(go, s.phase, F(float(kRefine)));
+            want = want || go;
         }
         next.t = tq;
         next.u = ray.U(tq);
@@ -340,17 +267,6 @@ struct LinearSearch {
         out.nCoarse = s.nCoarse;
         out.nRefine = s.nRefine;
         out.hit = s.found;
-    }
-
-  private:
-    // Replaces the bracket end on the same side of the surface as the sample (t, h).
-    template <class M, class F, class S>
-    static void Narrow(const M& m, const F& t, const F& h, S& s) {
-        const M below = m && (t >= h), above = m && !(t >= h);
-        Assign(below, s.t2, t);
-        Assign(below, s.h2, h);
-        Assign(above, s.t1, t);
-        Assign(above, s.h1, h);
     }
 };
 

@@ -4,10 +4,9 @@
 // the same float operations in the same order as the C++ kernel. Families 5 and 6 (cns,
 // rcns) read n_z of the cone side's normal and step by 004 eq. 3.2; family 7 (mcns) reads
 // the four stacked cones' n_z from the layers of the (depth, n_z) array and keeps the
-// largest step.
+// largest step. After the cone loop, the refinement of refine.glsl (uRefinement).
 
 uniform int uConeSteps;     // cone steps
-uniform int uRefineSteps;   // binary steps (rcs)
 uniform int uConeStepForm;  // 0: Listing 18-3's step; 1: Alg. 4's unit-ray form
 uniform int uRelaxed;       // 1: rcs
 uniform int uConeFamily;    // kernels/cone_step.h ConeFamily: 2 qcsm, 3 acm4, 4 acm8,
@@ -70,7 +69,8 @@ int ConeLayerOf(float du, float dv) {
     return 0;
 }
 
-const int kConePhaseCone = 0, kConePhaseRefine = 1, kConePhaseDone = 2;
+const int kConePhaseCone = 0, kConePhaseBottom = 1, kConePhaseRefine = 2,
+          kConePhaseDone = 3;
 
 MarchResult March(MarchInput ray) {
     precise float sq = ray.dirUv.x * ray.dirUv.x + ray.dirUv.y * ray.dirUv.y;
@@ -78,9 +78,11 @@ MarchResult March(MarchInput ray) {
     precise float len = sqrt(sq + 1.0);
     precise float rdXy = rayRatio / len;
     precise float rdZ = 1.0 / len;
-    precise float t = 0.0, tb = 0.0, range = 0.0, tq = 0.0;
+    precise float t = 0.0, tq = 0.0, tResult = 0.0;
+    precise float tAbove = 0.0, hAbove = 0.0, tBelow = 0.0, hBelow = 0.0;
     int nCoarse = 0, nRefine = 0;
-    bool inside = false;
+    bool inside = false, haveAbove = false;
+    Refiner q = RefinerClear();
     int phase = kConePhaseCone;
     int layer = ConeLayerOf(ray.dirUv.x, ray.dirUv.y);
     bool stacked = uConeFamily == kFamilyStacked;
@@ -103,11 +105,21 @@ MarchResult March(MarchInput ray) {
                 stack[k] = SampleHeightConeLayer(At(ray, tq), k).y;
         }
         RS_ON_SAMPLE(tq, At(ray, tq), h);
-        bool want = false;
+        bool want = false, startRefine = false, refineNext = false;
+        precise float segment = 0.0;
         if (phase == kConePhaseCone) {
             nCoarse = nCoarse + 1;
             bool isIn = t >= h;
+            if (isIn && !inside) {
+                tBelow = t;
+                hBelow = h;
+            }
             inside = inside || isIn;
+            if (!isIn) {
+                tAbove = t;
+                hAbove = h;
+                haveAbove = true;
+            }
             precise float d = Advance(t, h, r, rayRatio, rdXy, rdZ, normalForm);
             if (stacked) {
                 for (int k = 1; k < kStackedCones; ++k) {
@@ -122,37 +134,49 @@ MarchResult March(MarchInput ray) {
             if (!stop) {
                 tq = t;
                 want = true;
-            } else if (uRelaxed != 0) {
-                range = t * 0.5;
-                tb = t * 0.5;
+            } else {
+                if (!inside) tBelow = t;
+                tResult = t;
                 phase = kConePhaseDone;
-                if (uRefineSteps > 0) {
-                    phase = kConePhaseRefine;
-                    tq = tb;
-                    want = true;
+                if (uRefinement == kRefineBinary) {
+                    startRefine = uRelaxed != 0 || haveAbove;
+                    segment = uRelaxed != 0 ? tBelow : tBelow - tAbove;
+                } else if (uRefinement != kRefineNone) {
+                    startRefine = inside && haveAbove;
+                    if (!inside) {
+                        tq = t;
+                        phase = kConePhaseBottom;
+                        want = true;
+                    }
                 }
-            } else {
-                phase = kConePhaseDone;
             }
-        } else {  // kConePhaseRefine
+        } else if (phase == kConePhaseBottom) {
+            phase = kConePhaseDone;
+            if (t >= h) {
+                hBelow = h;
+                startRefine = true;
+            }
+        } else {  // kConePhaseRefine: consume the refinement sample
             nRefine = nRefine + 1;
-            range = range * 0.5;
-            if (tb < h)
-                tb = tb + range;
-            else
-                tb = tb - range;
-            if (nRefine < uRefineSteps) {
-                tq = tb;
+            RefineConsume(q, h);
+            refineNext = true;
+        }
+        if (startRefine) {
+            refineNext =
+                RefineStart(q, tAbove, hAbove, tBelow, hBelow, segment, tResult, nRefine);
+        }
+        if (refineNext) {  // the top of the refinement loop
+            phase = kConePhaseDone;
+            if (RefineNext(q, nRefine, tResult, tq)) {
+                phase = kConePhaseRefine;
                 want = true;
-            } else {
-                phase = kConePhaseDone;
             }
         }
         if (want && !Take()) want = false;
         if (!want) break;
     } while (true);
 
-    precise float tResult = (uRelaxed != 0 && phase != kConePhaseCone) ? tb : t;
+    if (phase == kConePhaseCone) tResult = t;
     MarchResult m;
     m.uvHit = At(ray, tResult);
     m.depthHit = tResult;

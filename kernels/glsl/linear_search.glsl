@@ -10,45 +10,16 @@
 // trip, so no trip ever starts with every lane finished (which would still execute the
 // unmasked texture instruction).
 
-const int kRefineNone = 0, kRefineBinary = 1, kRefineInterval = 2, kRefineSecant = 3,
-          kRefinePom = 4;
 const int kPhaseCoarse = 0, kPhaseBottom = 1, kPhaseRefine = 2, kPhaseDone = 3;
 
-uniform int uLinearSteps;    // coarse steps over t in [0,1]
-uniform int uRefineSteps;    // refinement iterations
-uniform int uRefinement;     // kRefine*
-uniform float uSecantTolerance;
-
-// LinearSearchKernel::SecantPoint.
-float SecantPoint(float t1, float h1, float t2, float h2) {
-    precise float denom = (t2 - t1) - (h2 - h1);
-    precise float f = denom > 0.0 ? (h1 - t1) / denom : 1.0;
-    f = min(max(f, 0.0), 1.0);
-    precise float r = f * (t2 - t1) + t1;
-    return r;
-}
-
-// Replaces the bracket end on the same side of the surface as the sample (t, h)
-// (LinearSearchKernel::Narrow); moves values only, no arithmetic.
-void Narrow(float t, float h, inout float t1, inout float h1, inout float t2, inout float h2) {
-    if (t >= h) {
-        t2 = t;
-        h2 = h;
-    } else {
-        t1 = t;
-        h1 = h;
-    }
-}
+uniform int uLinearSteps;  // coarse steps over t in [0,1]
 
 MarchResult March(MarchInput ray) {
     precise float stepSize = 1.0 / float(uLinearSteps);
     precise float t = 0.0, tAbove = 0.0, hAbove = 0.0, tBelow = 0.0, hBelow = 0.0;
     bool haveAbove = false, found = false;
-    int nCoarse = 0, nRefine = 0, i = 0, k = 0;
-    // refinement state
-    precise float s = 0.0, tb = 0.0, t1 = 0.0, h1 = 0.0, t2 = 0.0, h2 = 0.0, tInt = 0.0,
-                  best = 0.0;
-    bool converged = false;
+    int nCoarse = 0, nRefine = 0, i = 0;
+    Refiner q = RefinerClear();
     precise float tResult = 0.0;  // the returned point, valid in kPhaseDone
     precise float tq = 0.0;       // ray parameter of the next fetch
 
@@ -107,73 +78,20 @@ MarchResult March(MarchInput ray) {
             }
         } else if (phase == kPhaseBottom) {
             hBelow = h;
+            phase = kPhaseDone;
             startRefine = true;
         } else {  // kPhaseRefine: consume the refinement sample
             nRefine = nRefine + 1;
-            if (uRefinement == kRefineBinary) {
-                s = s * 0.5;
-                tb = tb >= h ? tb - s : tb + s;
-            } else if (uRefinement == kRefineInterval) {
-                Narrow(tInt, h, t1, h1, t2, h2);
-            } else if (!converged) {  // kRefineSecant
-                Narrow(tInt, h, t1, h1, t2, h2);
-                best = h;
-                converged = abs(h - tInt) <= uSecantTolerance;
-            }
-            k = k + 1;
+            RefineConsume(q, h);
             refineNext = true;
         }
         if (startRefine) {
-            k = 0;
-            refineNext = true;
-            if (uRefinement == kRefineBinary) {
-                s = stepSize * 0.5;
-                tb = tBelow - s;
-            } else if (uRefinement == kRefinePom) {
-                tResult = SecantPoint(tAbove, hAbove, tBelow, hBelow);
-                nRefine = 1;
-                phase = kPhaseDone;
-                refineNext = false;
-            } else {
-                t1 = tAbove;
-                h1 = hAbove;
-                t2 = tBelow;
-                h2 = hBelow;
-                tInt = t2;
-                best = t2;
-                converged = false;
-            }
+            refineNext = RefineStart(q, tAbove, hAbove, tBelow, hBelow, stepSize, tResult,
+                                     nRefine);
         }
         if (refineNext) {  // the top of the refinement loop
             phase = kPhaseDone;
-            if (uRefinement == kRefineBinary) {
-                tResult = tb;
-                if (k < uRefineSteps) {
-                    if (Take()) {
-                        tq = tb;
-                        phase = kPhaseRefine;
-                    }
-                }
-            } else if (uRefinement == kRefineInterval) {
-                tResult = tInt;
-                if (k < uRefineSteps) {
-                    tInt = SecantPoint(t1, h1, t2, h2);
-                    tResult = tInt;
-                    if (Take()) {
-                        tq = tInt;
-                        phase = kPhaseRefine;
-                    }
-                }
-            } else {  // kRefineSecant
-                tResult = best;
-                if (k < uRefineSteps && !(converged && uEarlyExit)) {
-                    tInt = SecantPoint(t1, h1, t2, h2);
-                    if (Take()) {
-                        tq = tInt;
-                        phase = kPhaseRefine;
-                    }
-                }
-            }
+            if (RefineNext(q, nRefine, tResult, tq) && Take()) phase = kPhaseRefine;
         }
     } while (phase != kPhaseDone);
 

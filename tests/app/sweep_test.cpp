@@ -64,6 +64,26 @@ void ExpectConfigError(const std::string& text, const std::string& culprit) {
 
 }  // namespace
 
+TEST(Sweep, NamedParameterValuesCrossAsNames) {
+    const auto configs = ParseSweepConfig(R"({
+      "maps": ["builtin:shapes:32"],
+      "methods": [{"method": "csm", "set": {"refine": ["none", "binary", "interval"],
+                                            "refine_steps": [3, 5]}}]})",
+                                          "cfg");
+    ASSERT_EQ(configs.size(), 6u);
+    EXPECT_EQ(configs[3].settings.set,
+              (std::vector<std::string>{"refine=binary", "refine_steps=5"}));
+    EXPECT_EQ(configs[3].columns["set.refine"], "binary");
+    EXPECT_EQ(configs[3].columns["set.refine_steps"], 5);
+    // A name the parameter does not have is the configuration's error, with the choices.
+    ExpectConfigError(R"({"maps": ["builtin:shapes:32"],
+      "methods": [{"method": "csm", "set": {"refine": ["bisect"]}}]})",
+                      "none, binary, interval, secant, pom");
+    ExpectConfigError(R"({"maps": ["builtin:shapes:32"],
+      "methods": [{"method": "csm", "set": {"refine": [true]}}]})",
+                      "refine");
+}
+
 TEST(Sweep, CrossesMapsViewsMethodsAndSetLists) {
     const auto configs = ParseSweepConfig(kConfig, "cfg");
     ASSERT_EQ(configs.size(), 2u * 2u * (4u + 1u));

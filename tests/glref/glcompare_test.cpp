@@ -11,6 +11,8 @@
 #include <tuple>
 
 #include "core/error.h"
+#include "kernels/refine.h"
+#include "kernels/registry.h"
 #include "metrics/record_compare.h"
 #include "texture/image_io.h"
 
@@ -247,6 +249,40 @@ TEST(GlCompare, ConeFiltersAreBitIdentical) {
             }
     }
     EXPECT_GE(compared, 8 * 4 * 2);  // csm, rcs, qcsm, acm4, acm8, cns, rcns, mcns
+}
+
+// Every coarse search with every refinement (kernels/refine.h and refine.glsl): float
+// and 8-bit heights, early exit and fixed loops, and a budget that cuts refinements.
+TEST(GlCompare, RefinementsAreBitIdentical) {
+    int compared = 0;
+    for (const KernelInfo* info : Methods()) {
+        bool refines = false;
+        for (const ParamSpec& p : info->params) refines = refines || p.name == "refine";
+        if (!refines) continue;
+        for (const std::string_view refine : kRefinementChoices)
+            for (int variant = 0; variant < 2; ++variant) {
+                const bool r8 = variant == 1;
+                SCOPED_TRACE(std::string(info->name) + " refine=" + std::string(refine) +
+                             (r8 ? " r8, early_exit flipped, budget 14" : " r32f"));
+                RenderSettings s;
+                s.method = info->name;
+                s.set = {"refine=" + std::string(refine), "refine_steps=4"};
+                if (r8) {
+                    const bool earlyExit =
+                        ResolveParams(*info, {}).at("early_exit") != 0.0;
+                    s.set.push_back(earlyExit ? "early_exit=0" : "early_exit=1");
+                    s.set.push_back("budget=14");
+                    s.sampler.precision = Precision::Llvmpipe8;
+                }
+                s.width = s.height = 80;
+                ExpectIdentical(
+                    RunGlCompare(LoadField("builtin:noise",
+                                           r8 ? TextureFormat::R8 : TextureFormat::R32F),
+                                 s, Gl()));
+                ++compared;
+            }
+    }
+    EXPECT_GE(compared, 13 * 5 * 2);  // 5 linear presets and 8 cone kernels
 }
 
 // The orthographic texture-space view: every kernel, float and 8-bit, a slanted and a
