@@ -3,6 +3,7 @@
 #include "app/render_options.h"
 
 #include <cctype>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -26,6 +27,8 @@ void ParseSize(const std::string& text, int& w, int& h) {
 
 namespace {
 
+constexpr double kPi = 3.14159265358979323846;
+
 void ParseScale(const std::string& opt, const std::string& text, float& lo, float& hi) {
     if (text.empty()) return;
     const size_t c = text.find(':');
@@ -40,6 +43,26 @@ void ParseScale(const std::string& opt, const std::string& text, float& lo, floa
     if (!(*b > *a)) throw Error(opt + " \"" + text + "\": MAX must be greater than MIN");
     lo = *a;
     hi = *b;
+}
+
+/// "X,Y,Z": three finite numbers, as --view-dir and --light-dir take them.
+glm::vec3 ParseVec3(const std::string& opt, const std::string& text) {
+    std::vector<float> c;
+    size_t start = 0;
+    for (;;) {
+        const size_t comma = text.find(',', start);
+        const auto part = std::string_view(text).substr(
+            start, comma == std::string::npos ? std::string::npos : comma - start);
+        const std::optional<float> f = ParseFiniteFloat(part);
+        if (!f || c.size() == 3)
+            throw Error(opt + " \"" + text + "\": expected X,Y,Z, three numbers");
+        c.push_back(*f);
+        if (comma == std::string::npos) break;
+        start = comma + 1;
+    }
+    if (c.size() != 3)
+        throw Error(opt + " \"" + text + "\": expected X,Y,Z, three numbers");
+    return {c[0], c[1], c[2]};
 }
 
 /// "0:64": a heatmap scale as --iterations-scale takes it.
@@ -83,6 +106,19 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
                         "surface, X,Y,Z with Z < 0")
             ->type_name("X,Y,Z")
             ->default_str("0,0,-1");
+    cmd->add_option(
+           "--light-dir", o.lightDir,
+           "directional light of the shading: tangent-space direction from the "
+           "surface towards the light, X,Y,Z with Z > 0 (x along +u, y along +v)")
+        ->type_name("X,Y,Z")
+        ->default_str("-0.4,-0.5,0.77");
+    cmd->add_option("--light-angle", o.lightAngle,
+                    "the light as angles: degrees from the plane normal, [0, 90) "
+                    "(default 45 when --light-azimuth is given)")
+        ->check(CLI::Range(0.0f, 89.99f));
+    cmd->add_option("--light-azimuth", o.lightAzimuth,
+                    "the light's azimuth, degrees counter-clockwise from +u (default 0 "
+                    "when --light-angle is given)");
     AddEnumOption(cmd, "--filter", o.settings.sampler.filter, kFilterNames,
                   "height sampler filter");
     AddEnumOption(cmd, "--wrap", o.settings.sampler.wrap, kWrapModeNames,
@@ -147,24 +183,21 @@ void ResolveRenderSettings(RenderOptions& o) {
     if (!o.viewDir.empty()) {
         if (s.camera != CameraKind::Ortho)
             throw Error("--view-dir " + o.viewDir + ": applies to --camera ortho");
-        std::vector<float> c;
-        size_t start = 0;
-        for (;;) {
-            const size_t comma = o.viewDir.find(',', start);
-            const auto part = std::string_view(o.viewDir).substr(
-                start, comma == std::string::npos ? std::string::npos : comma - start);
-            const std::optional<float> f = ParseFiniteFloat(part);
-            if (!f)
-                throw Error("--view-dir \"" + o.viewDir +
-                            "\": expected X,Y,Z, three numbers");
-            c.push_back(*f);
-            if (comma == std::string::npos) break;
-            start = comma + 1;
-        }
-        if (c.size() != 3)
-            throw Error("--view-dir \"" + o.viewDir +
-                        "\": expected X,Y,Z, three numbers");
-        s.viewDir = glm::vec3(c[0], c[1], c[2]);
+        s.viewDir = ParseVec3("--view-dir", o.viewDir);
+    }
+    if (!o.lightDir.empty()) {
+        if (o.lightAngle || o.lightAzimuth)
+            throw Error("--light-dir " + o.lightDir +
+                        ": give the light either as --light-dir or as --light-angle / "
+                        "--light-azimuth, not both");
+        s.lightDir = ParseVec3("--light-dir", o.lightDir);
+    } else if (o.lightAngle || o.lightAzimuth) {
+        if (o.lightAzimuth && !std::isfinite(*o.lightAzimuth))
+            throw Error("--light-azimuth: must be finite");
+        const double a = double(o.lightAngle.value_or(45.0f)) * kPi / 180.0,
+                     b = double(o.lightAzimuth.value_or(0.0f)) * kPi / 180.0;
+        s.lightDir = glm::vec3(float(std::sin(a) * std::cos(b)),
+                               float(std::sin(a) * std::sin(b)), float(std::cos(a)));
     }
     if (!o.coneEncoding.empty()) {
         const auto e = ParseConeEncoding(o.coneEncoding);

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -28,6 +29,8 @@ struct RenderOptions {
     std::string iterScale, fetchScale;  ///< MIN:MAX; empty: the settings' scale
     std::string viewDir;                ///< X,Y,Z (--view-dir); empty: the settings'
     const CLI::Option* viewDirOption = nullptr;
+    std::string lightDir;  ///< X,Y,Z (--light-dir); empty: the settings'
+    std::optional<float> lightAngle, lightAzimuth;  ///< --light-angle, --light-azimuth
     std::string coneEncoding;     ///< --cone-encoding; empty: the kernel's own
     std::string coneMapChannel;   ///< --cone-map-channel R|G|B|A
     std::string coneMapEncoding;  ///< --cone-map-encoding

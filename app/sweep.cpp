@@ -35,9 +35,9 @@ constexpr size_t kMaxConfigurations = 1000000;
 /// The render keys a view, or the top level, may set.
 const std::vector<std::string>& RenderKeys() {
     static const std::vector<std::string> kKeys = {
-        "view_angle", "azimuth", "distance",       "fov",     "depth_scale", "tiling",
-        "filter",     "wrap",    "texture_format", "threads", "lanes",       "camera",
-        "view_dir"};
+        "view_angle", "azimuth",  "distance",       "fov",     "depth_scale", "tiling",
+        "filter",     "wrap",     "texture_format", "threads", "lanes",       "camera",
+        "view_dir",   "light_dir"};
     return kKeys;
 }
 
@@ -104,6 +104,11 @@ void ApplyRenderKey(RenderSettings& s, const std::string& key, const ojson& v,
             Bad(at, "expected [X, Y, Z], got " + v.dump());
         s.viewDir = glm::vec3(float(Number(v[0], at)), float(Number(v[1], at)),
                               float(Number(v[2], at)));
+    } else if (key == "light_dir") {
+        if (!v.is_array() || v.size() != 3)
+            Bad(at, "expected [X, Y, Z], got " + v.dump());
+        s.lightDir = glm::vec3(float(Number(v[0], at)), float(Number(v[1], at)),
+                               float(Number(v[2], at)));
     } else {
         Bad(at, "unknown key; valid: " + Join(RenderKeys()));
     }

@@ -1,6 +1,7 @@
 // The refinement searches that follow a coarse search, shared by every kernel that has
-// one (the linear search, the cone kernels): `--set refine=none|binary|interval|secant|pom`
-// with `refine_steps` and `secant_tolerance`. kernels/glsl/refine.glsl is the same code.
+// one (the linear search, the cone kernels): `--set
+// refine=none|binary|interval|secant|pom` with `refine_steps` and `secant_tolerance`.
+// kernels/glsl/refine.glsl is the same code.
 //
 // A coarse search hands over a bracket: (t1, h1) the last point it sampled outside the
 // relief (t < h), (t2, h2) the first it sampled inside (t >= h), and `step`, the length

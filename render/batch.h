@@ -7,8 +7,10 @@
 // bit-identical for every width (tests/render/lane_width_test.cpp).
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <functional>
+#include <glm/vec3.hpp>
 #include <memory>
 #include <span>
 #include <string>
@@ -41,6 +43,12 @@ struct TracedFetch {
 };
 using TraceSink = std::function<void(const TracedFetch&)>;
 
+/// `d` scaled to unit length in float (the shading's light direction).
+inline glm::vec3 UnitLight(glm::vec3 d) {
+    const float inv = 1.0f / std::sqrt(d.x * d.x + d.y * d.y + d.z * d.z);
+    return {d.x * inv, d.y * inv, d.z * inv};
+}
+
 /// What every width's entry point receives: the kernel (its index in KernelTypes and its
 /// Params, built by MakeKernelParams), the fetch budget and the textures.
 struct BatchJob {
@@ -50,6 +58,8 @@ struct BatchJob {
     Textures textures;
     const ViewUniforms* view = nullptr;  ///< for batches given as pixels
     float slopeScale = 1.0f;             ///< depth scale x tiling, for shading
+    /// Unit tangent-space direction towards the light, for shading (SceneLight).
+    glm::vec3 light = UnitLight({-0.4f, -0.5f, 0.77f});
 };
 
 using BatchFn = void (*)(const BatchJob& job, LaneBatch& batch);

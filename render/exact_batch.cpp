@@ -35,8 +35,8 @@ void RunExactBatch(const BatchJob& job, LaneBatch& b) {
         b.flags[i] = 0;  // the surface is always met, by t = 1 at the latest
         if (!b.rgb) continue;
         F rgb[3] = {F(0.0f), F(0.0f), F(0.0f)};
-        detail::ShadeHit<L>(tex, job.slopeScale, F(b.u[i]), F(b.v[i]), F(b.depth[i]),
-                            M(true), M(true), rgb);
+        detail::ShadeHit<L>(tex, job.slopeScale, job.light, F(b.u[i]), F(b.v[i]),
+                            F(b.depth[i]), M(true), M(true), rgb);
         for (int c = 0; c < 3; ++c) b.rgb[3 * i + c] = rgb[c][0];
     }
 }

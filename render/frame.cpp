@@ -225,6 +225,7 @@ RenderOutput Render(const DepthField& field, const RenderSettings& s) {
     const Mesh mesh = MakePlane(s.tiling);
     job.view = &uniforms;
     job.slopeScale = s.depthScale * s.tiling;
+    job.light = SceneLight(s);
 
     auto start = std::chrono::steady_clock::now();
     FrameProgram program(job, run, out.record, out.color, tiles);

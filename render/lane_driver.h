@@ -24,10 +24,10 @@ namespace reliefsim::detail {
 /// central differences of the height sampler (four uncounted fetches), albedo by depth,
 /// magenta where the kernel found no hit (docs/architecture.md "Shading").
 template <class L>
-RS_INLINE void ShadeHit(const LaneTextures& tex, float slopeScale, const typename L::F& u,
-                        const typename L::F& v, const typename L::F& depth,
-                        const typename L::M& hit, const typename L::M& active,
-                        typename L::F (&rgb)[3]) {
+RS_INLINE void ShadeHit(const LaneTextures& tex, float slopeScale, const glm::vec3& light,
+                        const typename L::F& u, const typename L::F& v,
+                        const typename L::F& depth, const typename L::M& hit,
+                        const typename L::M& active, typename L::F (&rgb)[3]) {
     using F = typename L::F;
     const float du = 1.0f / float(tex.width), dv = 1.0f / float(tex.height);
     F unused(0.0f);
@@ -42,18 +42,15 @@ RS_INLINE void ShadeHit(const LaneTextures& tex, float slopeScale, const typenam
     F nx = ddu * F(slopeScale), ny = ddv * F(slopeScale), nz(1.0f);
     const F inv = F(1.0f) / stdx::sqrt(nx * nx + ny * ny + nz * nz);
     nx = nx * inv, ny = ny * inv, nz = nz * inv;
-    float lx = -0.4f, ly = -0.5f, lz = 0.77f;
-    const float linv = 1.0f / std::sqrt(lx * lx + ly * ly + lz * lz);
-    lx = lx * linv, ly = ly * linv, lz = lz * linv;
-    const F dot = nx * F(lx) + ny * F(ly) + nz * F(lz);
+    const F dot = nx * F(light.x) + ny * F(light.y) + nz * F(light.z);
     const F lambert = Select(dot > F(0.0f), dot, F(0.0f));
     const F d = Select(depth < F(0.0f), F(0.0f), Select(depth > F(1.0f), F(1.0f), depth));
     const float top[3] = {0.93f, 0.80f, 0.55f}, deep[3] = {0.35f, 0.45f, 0.65f};
     const float miss[3] = {0.9f, 0.1f, 0.6f};  // no hit: magenta, as peers do
-    const F light = F(0.15f) + F(0.85f) * lambert;
+    const F lit = F(0.15f) + F(0.85f) * lambert;
     for (int c = 0; c < 3; ++c) {
         const F albedo = Select(hit, F(top[c]) + F(deep[c] - top[c]) * d, F(miss[c]));
-        rgb[c] = albedo * light;
+        rgb[c] = albedo * lit;
     }
 }
 
@@ -163,7 +160,8 @@ RS_INLINE void EndPack(const typename K::Params& params, const BatchJob& job,
     K::template End<L>(params, p.ray, p.state, out);
     F rgb[3] = {F(0.0f), F(0.0f), F(0.0f)};
     if (b.rgb)
-        ShadeHit<L>(tex, job.slopeScale, out.u, out.v, out.depth, out.hit, p.valid, rgb);
+        ShadeHit<L>(tex, job.slopeScale, job.light, out.u, out.v, out.depth, out.hit,
+                    p.valid, rgb);
     for (int k = 0; k < L::kWidth; ++k) {
         if (!p.valid[k]) continue;
         const int i = p.base + k;

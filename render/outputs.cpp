@@ -51,6 +51,8 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
     if (s.camera == CameraKind::Ortho)
         j["view_dir"] = {ShortestDouble(s.viewDir.x), ShortestDouble(s.viewDir.y),
                          ShortestDouble(s.viewDir.z)};
+    j["light_dir"] = {ShortestDouble(s.lightDir.x), ShortestDouble(s.lightDir.y),
+                      ShortestDouble(s.lightDir.z)};
     j["view_angle"] = ShortestDouble(s.viewAngle);
     j["azimuth"] = ShortestDouble(s.azimuth);
     j["distance"] = ShortestDouble(s.distance);

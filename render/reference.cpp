@@ -39,6 +39,7 @@ ReferenceRecord RenderReference(const DepthField& field, const RenderSettings& s
     job.params = &surface;
     job.view = &view;
     job.slopeScale = s.depthScale * s.tiling;
+    job.light = SceneLight(s);
     const double step = CoarseStepDepth(s);
     const int w = record.width, h = record.height;
     const size_t n = size_t(w) * size_t(h);

@@ -59,6 +59,17 @@ void ValidateSettings(const RenderSettings& s) {
             bad("--tiling " + num(s.tiling) +
                 ": the ortho camera frames exactly one tile; leave --tiling at 1");
     }
+    {
+        const glm::vec3 l = s.lightDir;
+        const std::string text = num(l.x) + "," + num(l.y) + "," + num(l.z);
+        if (!(std::isfinite(l.x) && std::isfinite(l.y) && std::isfinite(l.z)))
+            bad("--light-dir " + text + ": must be finite");
+        if (!(l.z > 0.0f))
+            bad("--light-dir " + text +
+                ": Z must be > 0 (the light is above the surface)");
+        if (!(std::hypot(double(l.x), double(l.y)) <= 1e6 * double(l.z)))
+            bad("--light-dir " + text + ": |XY| must be <= 1e6 Z");
+    }
     if (s.method == kExactMethod) {
         if (!s.set.empty())
             bad("--set " + s.set.front() + ": method exact takes no parameters");
@@ -102,6 +113,8 @@ Mesh MakePlane(float tiling) {
     mesh.indices = {0, 1, 2, 0, 2, 3};  // counter-clockwise seen from +z
     return mesh;
 }
+
+glm::vec3 SceneLight(const RenderSettings& s) { return UnitLight(s.lightDir); }
 
 Kernel SettingsKernel(const RenderSettings& s) {
     const KernelInfo& method = FindMethod(s.method);

@@ -48,6 +48,9 @@ struct RenderSettings {
     /// The ortho view's tangent-space direction from the eye towards the surface (Z < 0;
     /// any length).
     glm::vec3 viewDir{0.0f, 0.0f, -1.0f};
+    /// The directional light of the shading: tangent-space direction (x along +u, y along
+    /// +v, z the plane normal) from the surface towards the light, Z > 0, any length.
+    glm::vec3 lightDir{-0.4f, -0.5f, 0.77f};
     SamplerState sampler;    ///< height-map filter and wrap
     KernelMapSettings maps;  ///< the kernel's derived maps (cone kernels)
     int threads = 0;         ///< worker threads; 0 = all cores
@@ -68,6 +71,9 @@ void ValidateSettings(const RenderSettings& settings);
 /// texel row 0 (the image's top row) lies on the far edge (+y) for azimuth 0. PixelToRay
 /// (render/view_ray.h) intersects exactly this plane.
 Mesh MakePlane(float tiling);
+
+/// The unit direction towards the light (settings.lightDir normalised in float).
+glm::vec3 SceneLight(const RenderSettings& settings);
 
 /// The settings' method with its --set parameters resolved (defaults filled in): the one
 /// place render, trace and glcompare configure their kernel.

@@ -328,3 +328,33 @@ TEST(Cli, BadConeMapsAreOneError) {
                            flt.string() + " --cone-map-encoding float",
                        "--cone-map-encoding float");
 }
+
+TEST(Cli, BadLightsAreOneError) {
+    const std::string r = "render --map builtin:shapes:32 --method relief ";
+    ExpectCleanFailure(r + "--light-dir 0,0,-1", "--light-dir");
+    ExpectCleanFailure(r + "--light-dir 1,0,0", "--light-dir");
+    ExpectCleanFailure(r + "--light-dir 1,2", "--light-dir");
+    ExpectCleanFailure(r + "--light-dir 1,2,3,4", "--light-dir");
+    ExpectCleanFailure(r + "--light-dir nan,0,1", "--light-dir");
+    ExpectCleanFailure(r + "--light-dir 0,0,1 --light-angle 30", "--light-dir");
+    ExpectCleanFailure(r + "--light-angle 90", "--light-angle");
+    ExpectCleanFailure(r + "--light-angle -1", "--light-angle");
+    ExpectCleanFailure(r + "--light-azimuth inf", "--light-azimuth");
+}
+
+TEST(Cli, LightAnglesAreTheLightDirection) {
+    // --light-angle 0 is the light along the normal: the same image as --light-dir 0,0,1.
+    fs::path d = Scratch();
+    const std::string r = "render --map builtin:shapes:32 --method relief --size 40x30 ";
+    ASSERT_EQ(RunCli(r + "--light-angle 0 --out " + (d / "a").string(), d).exitCode, 0);
+    ASSERT_EQ(RunCli(r + "--light-dir 0,0,2 --out " + (d / "b").string(), d).exitCode, 0);
+    ASSERT_EQ(RunCli(r + "--out " + (d / "c").string(), d).exitCode, 0);
+    auto read = [](const fs::path& p) {
+        std::ifstream in(p, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    EXPECT_EQ(read(d / "a" / "color.png"), read(d / "b" / "color.png"));
+    EXPECT_NE(read(d / "a" / "color.png"), read(d / "c" / "color.png"));
+    EXPECT_NE(read(d / "b" / "metrics.json").find("\"light_dir\""), std::string::npos)
+        << read(d / "b" / "metrics.json");
+}

@@ -1,6 +1,7 @@
 // The render pipeline end to end: determinism, analytic scenes, outputs.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 
@@ -176,4 +177,38 @@ TEST(Render, OutputCreatesMissingParentsOnlyOnSuccess) {
         ++entries;
     }
     EXPECT_EQ(entries, 2);  // "a" and "file"
+}
+
+TEST(Render, LambertShadingFollowsTheLight) {
+    // A flat plane's normal is +z: the light along the normal gives the full albedo
+    // (0.15 + 0.85 cos 0), one at 45 degrees 0.15 + 0.85 cos 45 of it, whatever the
+    // azimuth; a light from below the horizon of the normal is refused.
+    DepthField f;
+    f.width = f.height = 16;
+    f.depth.assign(256, 0.25f);
+    f.name = "flat";
+    RenderSettings s = Small("relief");
+    s.reference = false;
+    s.lightDir = {0.0f, 0.0f, 1.0f};
+    const RenderOutput top = Render(f, s);
+    s.lightDir = {1.0f, 0.0f, 1.0f};
+    const RenderOutput slanted = Render(f, s);
+    s.lightDir = {0.0f, -3.0f, 3.0f};
+    const RenderOutput other = Render(f, s);
+    size_t covered = 0;
+    for (size_t i = 0; i < top.record.hitDepth.size(); ++i) {
+        if (!top.record.Covered(i)) continue;
+        ++covered;
+        for (int c = 0; c < 3; ++c) {
+            const float a = top.color[3 * i + size_t(c)];
+            ASSERT_GT(a, 0.0f);
+            EXPECT_NEAR(slanted.color[3 * i + size_t(c)] / a,
+                        0.15 + 0.85 * std::sqrt(0.5), 1e-5);
+            EXPECT_NEAR(other.color[3 * i + size_t(c)], slanted.color[3 * i + size_t(c)],
+                        1e-6);
+        }
+    }
+    EXPECT_GT(covered, 1000u);
+    s.lightDir = {0.0f, 1.0f, 0.0f};
+    EXPECT_THROW(ValidateSettings(s), Error);
 }

@@ -34,7 +34,8 @@ DepthField Ramp(int n = 64) {
     f.width = f.height = n;
     f.depth.resize(size_t(n) * size_t(n));
     for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x) f.depth[size_t(y * n + x)] = (float(x) + 0.5f) / float(n);
+        for (int x = 0; x < n; ++x)
+            f.depth[size_t(y * n + x)] = (float(x) + 0.5f) / float(n);
     f.name = "ramp";
     return f;
 }
@@ -48,7 +49,7 @@ KernelMapSettings NoCache() {
 }
 
 RayRun Shoot(const char* method, const DepthField& f, const MarchInput& in,
-           const std::vector<std::string>& set, const SamplerState& sampler = {}) {
+             const std::vector<std::string>& set, const SamplerState& sampler = {}) {
     const KernelInfo& info = FindMethod(method);
     const Kernel kernel = MakeKernel(info, ResolveParams(info, set));
     std::shared_ptr<const void> params;
@@ -95,9 +96,10 @@ TEST(Refine, IsAParameterOfEveryCoarseSearch) {
 TEST(Refine, LinearPresetsAreOneSearchWithTheirRefinement) {
     // linear + refine=R answers exactly what the preset of R answers, fetch for fetch.
     const DepthField f = MakeBuiltinMap("noise", 64, 64);
-    const std::pair<const char*, const char*> presets[] = {
-        {"relief", "binary"}, {"interval", "interval"}, {"secant", "secant"},
-        {"pom", "pom"}};
+    const std::pair<const char*, const char*> presets[] = {{"relief", "binary"},
+                                                           {"interval", "interval"},
+                                                           {"secant", "secant"},
+                                                           {"pom", "pom"}};
     for (const auto& [preset, refine] : presets)
         for (int i = 0; i < 24; ++i) {
             SCOPED_TRACE(std::string(preset) + " ray " + std::to_string(i));
@@ -132,7 +134,7 @@ TEST(Refine, ChordIsExactOnARampAfterTheRelaxedSearch) {
             SCOPED_TRACE(r);
             const RayRun x =
                 Shoot(method, f, in, {std::string("refine=") + r, "refine_steps=1"},
-                    kClampBilinear);
+                      kClampBilinear);
             EXPECT_NEAR(x.result.depthHit, tStar, 2e-6);
             EXPECT_EQ(x.result.nRefine, 1);
             EXPECT_EQ(x.counts.nFetches, 16u);
@@ -142,7 +144,8 @@ TEST(Refine, ChordIsExactOnARampAfterTheRelaxedSearch) {
         EXPECT_EQ(pom.result.nRefine, 1);
         EXPECT_EQ(pom.counts.nFetches, 15u);
         const RayRun bin = Shoot(method, f, in, {"refine_steps=10"}, kClampBilinear);
-        EXPECT_NEAR(bin.result.depthHit, tStar, double(none.result.depthHit) / 2048.0 + 1e-6);
+        EXPECT_NEAR(bin.result.depthHit, tStar,
+                    double(none.result.depthHit) / 2048.0 + 1e-6);
         EXPECT_EQ(bin.counts.nFetches, 25u);
     }
 }
@@ -159,8 +162,8 @@ TEST(Refine, BinaryAfterConeStepsClosedFormOnAPlane) {
             SCOPED_TRACE("cone_steps " + std::to_string(n) + " refine_steps " +
                          std::to_string(b));
             const RayRun r = Shoot("csm", f, in,
-                                 {"cone_steps=" + std::to_string(n), "refine=binary",
-                                  "refine_steps=" + std::to_string(b)});
+                                   {"cone_steps=" + std::to_string(n), "refine=binary",
+                                    "refine_steps=" + std::to_string(b)});
             const double k = d * (1 - std::pow(q, n));
             const double s = d * std::pow(q, n - 1) * (1 - q);
             EXPECT_NEAR(r.result.depthHit, k - s / 2 / std::pow(2.0, b), 2e-6);
@@ -184,12 +187,13 @@ TEST(Refine, ChordRefinementsFetchTheEndOfAConservativeSearchOnce) {
         ASSERT_FALSE(none.result.hit) << method;
         for (const char* r : {"interval", "secant", "pom"}) {
             SCOPED_TRACE(std::string(method) + " " + r);
-            const RayRun x = Shoot(method, f, in, {"cone_steps=6", std::string("refine=") + r});
+            const RayRun x =
+                Shoot(method, f, in, {"cone_steps=6", std::string("refine=") + r});
             EXPECT_EQ(x.result.depthHit, none.result.depthHit);
             EXPECT_EQ(x.counts.nFetches, 7u);
             EXPECT_EQ(x.result.nRefine, 0);
-            const RayRun cut = Shoot(method, f, in,
-                                   {"cone_steps=6", std::string("refine=") + r, "budget=6"});
+            const RayRun cut = Shoot(
+                method, f, in, {"cone_steps=6", std::string("refine=") + r, "budget=6"});
             EXPECT_EQ(cut.result.depthHit, none.result.depthHit);
             EXPECT_EQ(cut.counts.nFetches, 6u);
             EXPECT_TRUE(cut.result.budgetExhausted);
@@ -211,8 +215,8 @@ TEST(Refine, ChordRefinesAConeSearchThatEndsInside) {
                             {0.6f * std::cos(a), 0.6f * std::sin(a)},
                             1.0f};
         const RayRun none = Shoot("csm", f, in, {"cone_steps=12"});
-        const RayRun x = Shoot("csm", f, in, {"cone_steps=12", "refine=interval",
-                                            "refine_steps=4"});
+        const RayRun x =
+            Shoot("csm", f, in, {"cone_steps=12", "refine=interval", "refine_steps=4"});
         if (x.result.nRefine == 0) {
             EXPECT_EQ(x.result.depthHit, none.result.depthHit) << i;
             continue;
@@ -220,9 +224,8 @@ TEST(Refine, ChordRefinesAConeSearchThatEndsInside) {
         ++refined;
         // Refining never moves the answer past K, the point the search stopped at.
         EXPECT_LE(x.result.depthHit, none.result.depthHit) << i;
-        EXPECT_EQ(x.counts.nFetches,
-                  none.counts.nFetches + uint32_t(x.result.nRefine) +
-                      (none.result.hit ? 0u : 1u))
+        EXPECT_EQ(x.counts.nFetches, none.counts.nFetches + uint32_t(x.result.nRefine) +
+                                         (none.result.hit ? 0u : 1u))
             << i;
     }
     EXPECT_GT(refined, 0);  // some rays of csm with bilinear ratios do end inside
