@@ -483,6 +483,7 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     glUniform1i(loc("uConeLayersFiltered"), 3);
     glUniform1i(loc("uConeSeparate"), coneSeparate ? 1 : 0);
     glUniform1i(loc("uConeSquared"), scene.coneSquared ? 1 : 0);
+    glUniform2f(loc("uMapSize"), float(field.width), float(field.height));
     UploadKernelUniforms(m.program, scene.kernel);
 
     m.lanesTemplate = LaneMeasurement{};

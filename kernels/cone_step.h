@@ -117,15 +117,28 @@ inline constexpr ParamSpec kConeStepForm = {
     "step formula: 0 = r (D - t) / (|dirUv| + r) (Listing 18-3); 1 = Alg. 4's unit-ray "
     "form",
     "uConeStepForm"};
+inline constexpr std::array<std::string_view, 3> kMinStepChoices = {"none", "texel",
+                                                                    "cell"};
+inline constexpr ParamSpec kMinStepParam = {
+    "min_step",
+    0,
+    0,
+    2,
+    true,
+    "least cone step: none; texel (Dummer: 1/width along the unit ray); cell (Ban et al. "
+    "2024: to the next bilinear cell border)",
+    "uMinStep",
+    kMinStepChoices};
 inline constexpr std::array<std::string_view, 1> kConeMaps = {"cone"};
 // The dissertation follows its cone searches with 5 binary steps (004 Tables 4.9-4.13).
-inline constexpr std::array<ParamSpec, 8> kConeParams = {
+inline constexpr std::array<ParamSpec, 9> kConeParams = {
     ConeSteps(15),
     RefineParam(Refinement::None),
     RefineSteps(5, "refinement iterations after the cone steps"),
     kSecantTolerance,
     kConeStepForm,
     kConeFilterParam,
+    kMinStepParam,
     kEarlyExitParam,
     kBudgetParam};
 inline constexpr std::array<std::string_view, 1> kRelaxedMaps = {"relaxed"};
@@ -168,13 +181,14 @@ struct ConeStepPreset<ConeFamily::Relaxed> {
         kName = "rcs",
         kTitle = "relaxed cone stepping + binary search",
         kSource = "Policarpo & Oliveira, GPU Gems 3 ch. 18 (001) Listing 18-3";
-    static constexpr std::array<ParamSpec, 8> kParams = {
+    static constexpr std::array<ParamSpec, 9> kParams = {
         ConeSteps(15),
         RefineParam(Refinement::Binary),
         RefineSteps(6, "refinement iterations (Listing 18-3: binary_steps = 6)"),
         kSecantTolerance,
         kConeStepForm,
         kConeFilterParam,
+        kMinStepParam,
         kEarlyExitFixed,
         kBudgetParam};
     static constexpr auto& kMaps = kRelaxedMaps;
@@ -328,6 +342,7 @@ struct ConeStep {
         Refinement refine = Refinement::None;
         int refineSteps = 0;
         float secantTolerance = 0.01f;
+        int minStep = 0;  ///< 0 none, 1 texel, 2 cell (kMinStepChoices)
         bool unitRayForm = false;
         bool earlyExit = true;
     };
@@ -340,6 +355,7 @@ struct ConeStep {
         p.refine = Refinement(int(get("refine")));
         p.refineSteps = int(get("refine_steps"));
         p.secantTolerance = float(get("secant_tolerance"));
+        p.minStep = int(get("min_step"));
         p.unitRayForm = get("cone_step") != 0.0;
         p.earlyExit = get("early_exit") != 0.0;
         return p;
@@ -407,6 +423,35 @@ struct ConeStep {
         return (r * (h - t)) / (rayRatio + r);
     }
 
+    /// The least cone step (min_step), in depth, from the ray point at s.t, never past
+    /// the bottom: texel, Dummer's 1/width along the unit ray (rd_z / W); cell, Ban et
+    /// al. 2024's step to the next border of the bilinear cell (the grid through the
+    /// texel centres) the ray crosses first, plus 1e-5 along the unit ray so the next
+    /// fetch lies in the next cell. A vertical ray has no border to reach: no least step.
+    template <class L>
+    RS_INLINE static typename L::F LeastStep(const Params& p, const LaneRay<L>& ray,
+                                             const State<L>& s) {
+        using F = typename L::F;
+        const F zero(0.0f), one(1.0f);
+        F least;
+        if (p.minStep == 1) {
+            least = s.rdZ / F(ray.mapW);
+        } else {
+            const F x = ray.U(s.t) * F(ray.mapW) - F(0.5f);
+            const F y = ray.V(s.t) * F(ray.mapH) - F(0.5f);
+            const F fx = stdx::floor(x), fy = stdx::floor(y);
+            const F wx = Select(ray.du > zero, fx + one, fx);
+            const F wy = Select(ray.dv > zero, fy + one, fy);
+            const F none(3.0e38f);
+            const F tx = Select(ray.du != zero, (wx - x) / (ray.du * F(ray.mapW)), none);
+            const F ty = Select(ray.dv != zero, (wy - y) / (ray.dv * F(ray.mapH)), none);
+            const F cell = Select(tx < ty, tx, ty);
+            least = Select(cell < none, cell + F(1e-5f) * s.rdZ, zero);
+        }
+        const F room = one - s.t;
+        return Select(least > room, room, least);
+    }
+
     template <class L>
     RS_INLINE static typename L::M Step(const Params& p, const LaneRay<L>& ray,
                                         State<L>& s, const Sample<L>& x,
@@ -445,6 +490,10 @@ struct ConeStep {
                                          s.rdXy, s.rdZ);
                     Assign((s.t < apex) && (dk > d), d, dk);
                 }
+            }
+            if (p.minStep != 0) {
+                const F least = LeastStep(p, ray, s);
+                Assign(d < least, d, least);
             }
             Assign(out && (d > zero), s.t, s.t + d);
             const M stopEarly = p.earlyExit ? in : M(false);

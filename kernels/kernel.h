@@ -150,6 +150,9 @@ struct LaneRay {
     F uEntry, vEntry;  ///< MarchInput::uvEntry
     F du, dv;          ///< MarchInput::dirUv
     F viewZ;           ///< MarchInput::viewZ
+    /// The height map's size in texels (the driver sets it; kernels that step by texel
+    /// cells read it).
+    float mapW = 1.0f, mapH = 1.0f;
     F U(const F& t) const { return uEntry + du * t; }
     F V(const F& t) const { return vEntry + dv * t; }
 };

@@ -111,6 +111,8 @@ RS_INLINE void BeginPack(const typename K::Params& params, const BatchJob& job,
             p.valid[k] = base + k < b.n;
         }
     }
+    p.ray.mapW = float(job.textures.depth ? job.textures.depth->width : 1);
+    p.ray.mapH = float(job.textures.depth ? job.textures.depth->height : 1);
     K::template Begin<L>(params, p.ray, p.state, p.fetch);
     p.active = p.valid;  // a budget, when set, is >= 1: the first fetch is allowed
 }

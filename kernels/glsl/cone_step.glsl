@@ -8,6 +8,8 @@
 
 uniform int uConeSteps;     // cone steps
 uniform int uConeStepForm;  // 0: Listing 18-3's step; 1: Alg. 4's unit-ray form
+uniform int uMinStep;       // 0 none, 1 texel (1/W along the unit ray), 2 cell border
+uniform vec2 uMapSize;      // the height map's size in texels
 uniform int uRelaxed;       // 1: rcs
 uniform int uConeFamily;    // kernels/cone_step.h ConeFamily: 2 qcsm, 3 acm4, 4 acm8,
                             // 5 cns, 6 rcns, 7 mcns
@@ -36,6 +38,29 @@ float Advance(float t, float h, float r, float rayRatio, float rdXy, float rdZ,
         d = (r * (h - t)) / (rayRatio + r);
     }
     return d;
+}
+
+// ConeStep::LeastStep: the least cone step from the ray point at t (min_step).
+float LeastStep(MarchInput ray, float t, float rdZ) {
+    precise float least;
+    if (uMinStep == 1) {
+        least = rdZ / uMapSize.x;
+    } else {
+        vec2 p = At(ray, t);
+        precise float x = p.x * uMapSize.x - 0.5;
+        precise float y = p.y * uMapSize.y - 0.5;
+        precise float fx = floor(x), fy = floor(y);
+        precise float wx = ray.dirUv.x > 0.0 ? fx + 1.0 : fx;
+        precise float wy = ray.dirUv.y > 0.0 ? fy + 1.0 : fy;
+        const float none = 3.0e38;
+        precise float tx = none, ty = none;
+        if (ray.dirUv.x != 0.0) tx = (wx - x) / (ray.dirUv.x * uMapSize.x);
+        if (ray.dirUv.y != 0.0) ty = (wy - y) / (ray.dirUv.y * uMapSize.y);
+        precise float cell = tx < ty ? tx : ty;
+        least = cell < none ? cell + 1e-5 * rdZ : 0.0;
+    }
+    precise float room = 1.0 - t;
+    return least > room ? room : least;
 }
 
 // ConeLayerOf: the direction class of dirUv, by the same exact comparisons.
@@ -128,6 +153,10 @@ MarchResult March(MarchInput ray) {
                     precise float dk = Advance(t, apex, stack[k], rayRatio, rdXy, rdZ, true);
                     if (t < apex && dk > d) d = dk;
                 }
+            }
+            if (uMinStep != 0) {
+                precise float least = LeastStep(ray, t, rdZ);
+                if (d < least) d = least;
             }
             if (!isIn && d > 0.0) t = t + d;
             bool stop = (uEarlyExit && isIn) || nCoarse >= uConeSteps;

@@ -285,6 +285,34 @@ TEST(GlCompare, RefinementsAreBitIdentical) {
     EXPECT_GE(compared, 13 * 5 * 2);  // 5 linear presets and 8 cone kernels
 }
 
+// The cone kernels' least step (min_step texel and cell), with and without a chord
+// refinement, float and 8-bit.
+TEST(GlCompare, LeastConeStepsAreBitIdentical) {
+    int compared = 0;
+    for (const KernelInfo* info : Methods()) {
+        if (info->maps.empty()) continue;
+        for (const char* least : {"texel", "cell"})
+            for (const char* refine : {"none", "interval"})
+                for (TextureFormat format : {TextureFormat::R32F, TextureFormat::R8}) {
+                    SCOPED_TRACE(std::string(info->name) + " min_step=" + least +
+                                 " refine=" + refine + " " +
+                                 std::string(ToString(format)));
+                    RenderSettings s;
+                    s.method = info->name;
+                    s.set = {std::string("min_step=") + least,
+                             std::string("refine=") + refine, "cone_steps=24"};
+                    s.sampler.precision = format == TextureFormat::R8
+                                              ? Precision::Llvmpipe8
+                                              : Precision::Float;
+                    s.width = s.height = 72;
+                    ExpectIdentical(
+                        RunGlCompare(LoadField("builtin:shapes", format), s, Gl()));
+                    ++compared;
+                }
+    }
+    EXPECT_GE(compared, 8 * 2 * 2 * 2);
+}
+
 // The orthographic texture-space view: every kernel, float and 8-bit, a slanted and a
 // steep direction, a non-square size.
 TEST(GlCompare, OrthoCameraIsBitIdentical) {

@@ -1,10 +1,13 @@
 // Any coarse search followed by any refinement (kernels/refine.h, `--set refine=`):
 // closed forms on a plane and a ramp, the fetch accounting of each refinement after a
-// cone search, the budget, and the linear presets as refinements of one search.
+// cone search, the budget, and the linear presets as refinements of one search. And the
+// cone kernels' least step (`min_step`), which makes a conservative search pierce.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "core/error.h"
 #include "kernels/registry.h"
@@ -248,4 +251,81 @@ TEST(Refine, BinaryAndIntervalReduceCsmErrorOnAFrame) {
     const double interval = mse({"refine=interval"});
     EXPECT_LT(binary, 0.8 * none);
     EXPECT_LT(interval, 0.8 * none);
+}
+
+namespace {
+
+// Every fetch of one ray (uv and ray depth), through the single-lane driver.
+std::vector<TracedFetch> Fetches(const char* method, const DepthField& f,
+                                 const MarchInput& in,
+                                 const std::vector<std::string>& set) {
+    const KernelInfo& info = FindMethod(method);
+    const Kernel kernel = MakeKernel(info, ResolveParams(info, set));
+    std::shared_ptr<const void> params;
+    const BatchJob job =
+        MakeBatchJob(kernel, BindKernelTextures(f, {}, kernel, NoCache()), params);
+    std::vector<TracedFetch> out;
+    MarchRay(job, in, [&](const TracedFetch& x) { out.push_back(x); });
+    return out;
+}
+
+}  // namespace
+
+TEST(MinStep, CellStepPiercesAPlaneAndIntervalMakesItExact) {
+    // Over a flat plane csm only approaches the surface (t_n = D (1 - q^n)). With the
+    // cell-border least step (Ban et al. 2024) it crosses a cell per step at least, so
+    // it ends inside, less than one cell step past the plane; interval's chord then
+    // lands on it.
+    const DepthField f = Constant(0.5f);
+    const MarchInput in{{0.3f, 0.4f}, {0.3f, 0.4f}, 1.0f};
+    EXPECT_EQ(ResolveParams(FindMethod("csm"), {"min_step=cell"}).at("min_step"), 2);
+    EXPECT_EQ(ResolveParams(FindMethod("rcs"), {"min_step=texel"}).at("min_step"), 1);
+    for (const char* method : {"csm", "qcsm", "acm4", "acm8"}) {
+        SCOPED_TRACE(method);
+        EXPECT_FALSE(Shoot(method, f, in, {}).result.hit);
+        for (const char* least : {"min_step=cell", "min_step=texel"}) {
+            SCOPED_TRACE(least);
+            const RayRun r = Shoot(method, f, in, {least, "cone_steps=64"});
+            ASSERT_TRUE(r.result.hit);
+            EXPECT_GE(r.result.depthHit, 0.5f);
+            // One cell along the ray is at most 1 / (32 * 0.4) in depth (+ 1e-5).
+            EXPECT_LE(r.result.depthHit, 0.5f + 1.0f / (32.0f * 0.4f) + 1e-4f);
+            const RayRun x =
+                Shoot(method, f, in,
+                      {least, "cone_steps=64", "refine=interval", "refine_steps=1"});
+            EXPECT_NEAR(x.result.depthHit, 0.5, 1e-6);
+            EXPECT_EQ(x.counts.nFetches, r.counts.nFetches + 1);
+        }
+    }
+}
+
+TEST(MinStep, EveryCellStepCrossesACellBorder) {
+    // The invariant of the cell least step: consecutive fetches of the cone loop lie in
+    // different bilinear cells (the grid through the texel centres), on a real map and
+    // for any direction. Without it csm takes many steps inside one cell.
+    const DepthField f = MakeBuiltinMap("shapes", 64, 64);
+    auto cell = [&](const TracedFetch& x) {
+        return std::pair{int(std::floor(x.u * 64.0f - 0.5f)),
+                         int(std::floor(x.v * 64.0f - 0.5f))};
+    };
+    int sameCellWithout = 0, steps = 0;
+    for (int i = 0; i < 200; ++i) {
+        const float a = 0.0314f * float(i);
+        const MarchInput in{{0.31f + 0.0021f * float(i), 0.17f + 0.0013f * float(i)},
+                            {0.5f * std::cos(a), 0.5f * std::sin(a)},
+                            1.0f};
+        const std::vector<TracedFetch> with =
+            Fetches("csm", f, in, {"min_step=cell", "cone_steps=40"});
+        for (size_t k = 1; k < with.size(); ++k) {
+            if (with[k - 1].t >= with[k - 1].sampled) break;  // the loop ended inside
+            if (with[k].t == 1.0f) break;  // the step was cut at the bottom
+            ++steps;
+            EXPECT_NE(cell(with[k]), cell(with[k - 1])) << "ray " << i << " fetch " << k;
+        }
+        const std::vector<TracedFetch> without = Fetches("csm", f, in, {"cone_steps=40"});
+        for (size_t k = 1; k < without.size(); ++k)
+            sameCellWithout += cell(without[k]) == cell(without[k - 1]) ? 1 : 0;
+    }
+    EXPECT_GT(steps, 500);
+    EXPECT_GT(sameCellWithout, 500);
 }
