@@ -75,6 +75,16 @@ TEST(Sweep, NamedParameterValuesCrossAsNames) {
               (std::vector<std::string>{"refine=binary", "refine_steps=5"}));
     EXPECT_EQ(configs[3].columns["set.refine"], "binary");
     EXPECT_EQ(configs[3].columns["set.refine_steps"], 5);
+    // A view may set the light.
+    const auto lit = ParseSweepConfig(R"({"maps": ["builtin:shapes:32"],
+      "views": [{"light_dir": [1, 0, 1]}], "methods": [{"method": "relief"}]})",
+                                      "cfg");
+    ASSERT_EQ(lit.size(), 1u);
+    EXPECT_EQ(lit[0].settings.lightDir.x, 1.0f);
+    EXPECT_EQ(lit[0].settings.lightDir.z, 1.0f);
+    ExpectConfigError(R"({"maps": ["builtin:shapes:32"],
+      "views": [{"light_dir": [1, 0, -1]}], "methods": [{"method": "relief"}]})",
+                      "--light-dir");
     // A name the parameter does not have is the configuration's error, with the choices.
     ExpectConfigError(R"({"maps": ["builtin:shapes:32"],
       "methods": [{"method": "csm", "set": {"refine": ["bisect"]}}]})",
