@@ -1,8 +1,8 @@
 // A sampling artifact as a user's unit test: cone step mapping with bilinearly filtered
-// cone ratios steps past the first hit (the dissertation's Fig. 4.6 artifact); the minimum
-// of the bilinear footprint (cone_filter=min4) removes most of it, and a refinement after
-// the cone steps pulls the overshoot back. Counted against the exact first hit of every
-// pixel (RenderOutput::referenceSummary).
+// cone ratios steps past the first hit (the dissertation's Fig. 4.6 artifact); the
+// minimum of the bilinear footprint (cone_filter=min4) removes most of it, and a
+// refinement after the cone steps pulls the overshoot back. Counted against the exact
+// first hit of every pixel (RenderOutput::referenceSummary).
 #include <gtest/gtest.h>
 
 #include "render/frame.h"
