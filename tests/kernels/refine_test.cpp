@@ -22,26 +22,11 @@ using namespace reliefsim;
 
 namespace {
 
-DepthField Constant(float depth, int n = 32) {
-    DepthField f;
-    f.width = f.height = n;
-    f.depth.assign(size_t(n) * size_t(n), depth);
-    f.name = "constant";
-    return f;
-}
-
-// depth(u) = u at texel centres; bilinear with clamp reproduces it exactly for u in
+// The analytic built-ins (texture/procedural.h): flat is depth 0.5 everywhere; ramp is
+// depth = u at texel centres, which bilinear with clamp reproduces exactly for u in
 // [0.5/W, 1 - 0.5/W], so a ray u(t) = u0 + dx t meets it at t* = u0 / (1 - dx).
-DepthField Ramp(int n = 64) {
-    DepthField f;
-    f.width = f.height = n;
-    f.depth.resize(size_t(n) * size_t(n));
-    for (int y = 0; y < n; ++y)
-        for (int x = 0; x < n; ++x)
-            f.depth[size_t(y * n + x)] = (float(x) + 0.5f) / float(n);
-    f.name = "ramp";
-    return f;
-}
+DepthField Flat() { return MakeBuiltinMap("flat", 32, 32); }
+DepthField Ramp() { return MakeBuiltinMap("ramp", 64, 64); }
 
 constexpr SamplerState kClampBilinear{Filter::Bilinear, WrapMode::Clamp};
 
@@ -157,7 +142,7 @@ TEST(Refine, BinaryAfterConeStepsClosedFormOnAPlane) {
     // csm over a flat plane at D: t_n = D (1 - q^n), q = a / (a + 1) (tests of Csm).
     // All samples lie above the plane, so Alg. 2 from K = t_n back over the last step
     // s = t_n - t_(n-1) moves forward every time: after b steps t = K - (s / 2) / 2^b.
-    const DepthField f = Constant(0.5f);
+    const DepthField f = Flat();
     const MarchInput in{{0.3f, 0.4f}, {0.3f, 0.4f}, 1.0f};  // a = 0.5
     const double q = 0.5 / 1.5, d = 0.5;
     for (int n : {2, 4, 8})
@@ -181,7 +166,7 @@ TEST(Refine, ChordRefinementsFetchTheEndOfAConservativeSearchOnce) {
     // A conservative search ends outside, short of the surface: interval, secant and pom
     // fetch that end point K once; it is outside, so K is the answer and no refinement
     // iteration runs. A budget that refuses that fetch answers K too.
-    const DepthField f = Constant(0.5f);
+    const DepthField f = Flat();
     const MarchInput in{{0.3f, 0.4f}, {0.3f, 0.4f}, 1.0f};
     // (cns and mcns store n_z = 1 over a plane, a 180 degree cone: their first step
     // lands on it.)
@@ -276,7 +261,7 @@ TEST(MinStep, CellStepPiercesAPlaneAndIntervalMakesItExact) {
     // cell-border least step (Ban et al. 2024) it crosses a cell per step at least, so
     // it ends inside, less than one cell step past the plane; interval's chord then
     // lands on it.
-    const DepthField f = Constant(0.5f);
+    const DepthField f = Flat();
     const MarchInput in{{0.3f, 0.4f}, {0.3f, 0.4f}, 1.0f};
     EXPECT_EQ(ResolveParams(FindMethod("csm"), {"min_step=cell"}).at("min_step"), 2);
     EXPECT_EQ(ResolveParams(FindMethod("rcs"), {"min_step=texel"}).at("min_step"), 1);
