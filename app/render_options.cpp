@@ -192,6 +192,8 @@ void ResolveRenderSettings(RenderOptions& o) {
                         "--light-azimuth, not both");
         s.lightDir = ParseVec3("--light-dir", o.lightDir);
     } else if (o.lightAngle || o.lightAzimuth) {
+        if (o.lightAngle && !std::isfinite(*o.lightAngle))
+            throw Error("--light-angle: must be a finite number in [0, 90)");
         if (o.lightAzimuth && !std::isfinite(*o.lightAzimuth))
             throw Error("--light-azimuth: must be finite");
         const double a = double(o.lightAngle.value_or(45.0f)) * kPi / 180.0,

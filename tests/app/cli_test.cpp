@@ -339,6 +339,7 @@ TEST(Cli, BadLightsAreOneError) {
     ExpectCleanFailure(r + "--light-dir 0,0,1 --light-angle 30", "--light-dir");
     ExpectCleanFailure(r + "--light-angle 90", "--light-angle");
     ExpectCleanFailure(r + "--light-angle -1", "--light-angle");
+    ExpectCleanFailure(r + "--light-angle nan", "--light-angle");
     ExpectCleanFailure(r + "--light-azimuth inf", "--light-azimuth");
 }
 
