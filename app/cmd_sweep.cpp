@@ -18,8 +18,18 @@ namespace {
 struct SweepArgs {
     std::string config, out;
     int taskIndex = -1, taskCount = -1, maxRows = -1;
-    bool quiet = false;
+    bool quiet = false, noCharts = false;
 };
+
+/// The charts of a finished run, unless --no-charts; a note when matplotlib is missing.
+std::string Charts(const std::string& dir, bool noCharts, bool quiet) {
+    if (noCharts) return "";
+    if (DrawSweepCharts(dir)) return ",mse_vs_steps.png,mse_vs_time.png";
+    if (!quiet)
+        std::cerr << "reliefsim: charts not drawn: no python3 with matplotlib "
+                     "(Debian: python3-matplotlib; --no-charts silences this)\n";
+    return "";
+}
 
 /// An environment variable as a non-negative integer, or `fallback`.
 int EnvInt(const char* name, int fallback) {
@@ -55,10 +65,11 @@ void RunSweepCommand(const SweepArgs& a) {
     o.progress = !a.quiet && isatty(2);
     const int n =
         RunSweep(ReadConfig(a.config), "--config \"" + a.config + "\"", a.out, o);
+    const std::string charts = Charts(a.out, a.noCharts, a.quiet);
     if (!a.quiet)
         std::cout << "reliefsim sweep: " << n << " configurations computed (task "
                   << o.taskIndex << " of " << o.taskCount << "); wrote " << a.out
-                  << "/{results.csv,tables.md}\n";
+                  << "/{results.csv,tables.md" << charts << "}\n";
 }
 
 }  // namespace
@@ -68,7 +79,8 @@ void RegisterSweepCommand(CLI::App& root) {
     auto* cmd = root.add_subcommand(
         "sweep",
         "run a study: methods x parameter ranges x maps x views from a JSON config into "
-        "--out (results.csv, tables.md, one row file per configuration; resumable)");
+        "--out (results.csv, tables.md, charts, one row file per configuration; "
+        "resumable)");
     cmd->add_option("--config", a->config,
                     "the study's JSON configuration (docs/studies.md)")
         ->required();
@@ -84,15 +96,23 @@ void RegisterSweepCommand(CLI::App& root) {
                     "stop after computing this many configurations (a partial run)")
         ->check(CLI::Range(0, 100000000));
     cmd->add_flag("--quiet", a->quiet, "print nothing on success, no progress bar");
+    cmd->add_flag("--no-charts", a->noCharts,
+                  "do not draw mse_vs_steps.png and mse_vs_time.png (matplotlib)");
     cmd->callback([a] { RunSweepCommand(*a); });
 
     auto parts = std::make_shared<std::vector<std::string>>();
     auto out = std::make_shared<std::string>();
+    auto noCharts = std::make_shared<bool>(false);
     auto* merge = root.add_subcommand(
         "merge", "join the folders of a sharded sweep (any order) into one sweep folder");
     merge->add_option("--out", *out, "output folder")->required();
     merge->add_option("parts", *parts, "the shards' --out folders")->required();
-    merge->callback([parts, out] { MergeSweeps(*parts, *out); });
+    merge->add_flag("--no-charts", *noCharts,
+                    "do not draw mse_vs_steps.png and mse_vs_time.png (matplotlib)");
+    merge->callback([parts, out, noCharts] {
+        MergeSweeps(*parts, *out);
+        Charts(*out, *noCharts, false);
+    });
 }
 
 }  // namespace reliefsim

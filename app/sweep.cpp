@@ -284,7 +284,9 @@ void WriteSummaries(const fs::path& dir, const std::map<int, ojson>& byIndex) {
 /// folder: not empty, a folder if it exists, parents that are folders, and no folder in
 /// place of a file it writes.
 void CheckSweepFolder(const std::string& option, const std::string& dir) {
-    CheckOutputDirectory(option, dir, {"sweep.json", "results.csv", "tables.md"});
+    CheckOutputDirectory(option, dir,
+                         {"sweep.json", "results.csv", "tables.md", "mse_vs_steps.png",
+                          "mse_vs_time.png"});
 }
 
 void CreateFolder(const fs::path& path, const std::string& option) {

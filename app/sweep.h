@@ -45,6 +45,13 @@ struct SweepRunOptions {
 int RunSweep(const std::string& configText, const std::string& subject,
              const std::string& outDir, const SweepRunOptions& options);
 
+/// Draws `dir`/mse_vs_steps.png and `dir`/mse_vs_time.png from `dir`/results.csv with
+/// scripts/sweep_charts.py (compiled in) run by $RELIEFSIM_PYTHON when it is set, else
+/// by the first of python3 on the PATH and /usr/bin/python3 that has matplotlib. Returns
+/// false, drawing nothing, when none has it; throws Error when the script fails. Each
+/// chart is written to a temporary and renamed: whole or absent.
+bool DrawSweepCharts(const std::string& dir);
+
 /// Joins the rows of sweep folders (shards, in any order) of one configuration into
 /// outDir, which then equals the unsharded sweep's folder outside timing columns.
 /// Throws Error when the parts hold different configurations, a configuration twice with

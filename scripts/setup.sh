@@ -6,7 +6,8 @@ set -euo pipefail
 RS_ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 RS_PACKAGES=(build-essential cmake pkg-config libglm-dev libopenimageio-dev libtbb-dev
              libbenchmark-dev libgtest-dev libgmock-dev nlohmann-json3-dev libcli11-dev fonts-dejavu-core
-             libegl1 libegl-mesa0 libgl1-mesa-dri libegl-dev libgl-dev libopengl-dev openimageio-tools)
+             libegl1 libegl-mesa0 libgl1-mesa-dri libegl-dev libgl-dev libopengl-dev openimageio-tools
+             python3-matplotlib)
 
 rs_install() {
     local missing=()

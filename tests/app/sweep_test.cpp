@@ -216,3 +216,78 @@ TEST(Sweep, ShardsMergedInAnyOrderEqualTheUnshardedRun) {
     // A missing shard is an error, not a silently shorter table.
     EXPECT_THROW(MergeSweeps({parts[0], parts[1]}, (d / "short").string()), Error);
 }
+
+namespace {
+
+/// True when the file starts with PNG's signature and an IHDR of a non-empty image.
+bool IsPng(const fs::path& p) {
+    const std::string s = Read(p);
+    if (s.size() < 24 || s.compare(0, 8, "\x89PNG\r\n\x1a\n") != 0 ||
+        s.compare(12, 4, "IHDR") != 0)
+        return false;
+    auto be32 = [&](size_t at) {
+        return uint32_t(uint8_t(s[at])) << 24 | uint32_t(uint8_t(s[at + 1])) << 16 |
+               uint32_t(uint8_t(s[at + 2])) << 8 | uint32_t(uint8_t(s[at + 3]));
+    };
+    return be32(16) > 0 && be32(20) > 0;
+}
+
+bool HaveMatplotlib() {
+    return std::system(
+               "python3 -c 'import matplotlib' >/dev/null 2>&1 || "
+               "/usr/bin/python3 -c 'import matplotlib' >/dev/null 2>&1") == 0;
+}
+
+}  // namespace
+
+TEST(Sweep, SweepAndMergeDrawChartsWithMatplotlib) {
+    const fs::path d = Scratch();
+    std::ofstream(d / "cfg.json") << kConfig;
+    const std::string cfg = "--config " + (d / "cfg.json").string();
+    const reliefsim::testing::CliResult r =
+        reliefsim::testing::RunCli("sweep " + cfg + " --out " + (d / "a").string(), d);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    if (!HaveMatplotlib()) {
+        EXPECT_FALSE(fs::exists(d / "a" / "mse_vs_steps.png"));
+        EXPECT_NE(r.err.find("charts not drawn"), std::string::npos) << r.err;
+        GTEST_SKIP() << "no python3 with matplotlib (Debian: python3-matplotlib)";
+    }
+    EXPECT_TRUE(r.err.empty()) << r.err;
+    EXPECT_NE(r.out.find("mse_vs_time.png"), std::string::npos) << r.out;
+    EXPECT_TRUE(IsPng(d / "a" / "mse_vs_steps.png"));
+    EXPECT_TRUE(IsPng(d / "a" / "mse_vs_time.png"));
+    EXPECT_FALSE(fs::exists(d / "a" / ".mse_vs_steps.png.tmp"));
+    // merge draws the joined folder's charts; --no-charts draws none.
+    ASSERT_EQ(reliefsim::testing::RunCli(
+                  "merge --out " + (d / "m").string() + " " + (d / "a").string(), d)
+                  .exitCode,
+              0);
+    EXPECT_TRUE(IsPng(d / "m" / "mse_vs_steps.png"));
+    ASSERT_EQ(reliefsim::testing::RunCli(
+                  "sweep " + cfg + " --no-charts --out " + (d / "b").string(), d)
+                  .exitCode,
+              0);
+    EXPECT_FALSE(fs::exists(d / "b" / "mse_vs_steps.png"));
+    EXPECT_TRUE(fs::exists(d / "b" / "results.csv"));
+}
+
+TEST(Sweep, ChartsWithoutMatplotlibAreANoteAndAFailingScriptIsAnError) {
+    const fs::path d = Scratch();
+    std::ofstream(d / "cfg.json") << kConfig;
+    const std::string cfg = "sweep --config " + (d / "cfg.json").string() + " --out ";
+    setenv("RELIEFSIM_PYTHON", (d / "no-such-python").c_str(), 1);
+    const reliefsim::testing::CliResult missing =
+        reliefsim::testing::RunCli(cfg + (d / "a").string(), d);
+    setenv("RELIEFSIM_PYTHON", "false", 1);  // an interpreter that fails
+    const reliefsim::testing::CliResult failing =
+        reliefsim::testing::RunCli(cfg + (d / "b").string(), d);
+    unsetenv("RELIEFSIM_PYTHON");
+    EXPECT_EQ(missing.exitCode, 0) << missing.err;
+    EXPECT_EQ(reliefsim::testing::CountLines(missing.err), 1) << missing.err;
+    EXPECT_NE(missing.err.find("charts not drawn"), std::string::npos) << missing.err;
+    EXPECT_TRUE(fs::exists(d / "a" / "results.csv"));
+    EXPECT_FALSE(fs::exists(d / "a" / "mse_vs_steps.png"));
+    EXPECT_NE(failing.exitCode, 0);
+    EXPECT_EQ(reliefsim::testing::CountLines(failing.err), 1) << failing.err;
+    EXPECT_NE(failing.err.find("sweep charts: false"), std::string::npos) << failing.err;
+}
