@@ -7,8 +7,8 @@ Reads DIR/results.csv (written by `reliefsim sweep` and `reliefsim merge`) and w
 DIR/mse_vs_steps.png and DIR/mse_vs_time.png, each with one panel per map and view. The
 x axes are the measured average steps per pixel (avg_iterations) and the frame time in ms,
 the y axis the dissertation's MSE (mse_paper), both logarithmic. A method whose `set`
-crosses several keys gets one line per value of every varying key but the first; the
-points of a line are joined in the order of x. Files are written to a temporary and
+crosses several keys gets one line per value of every varying key but the one with the
+most values; the points of a line are joined in the order of x. Files are written to a temporary and
 renamed, so a chart is either whole or absent. `reliefsim sweep` runs this script itself
 (it is compiled into the binary) when python3 with matplotlib is installed.
 Exit codes: 0 drawn, 1 bad input, 3 matplotlib is missing (silently with --if-matplotlib).
@@ -44,11 +44,13 @@ def panels(rows):
     for r in rows:
         methods.setdefault((r["map"], r["view"], r["method"]), []).append(r)
     for (m, v, method), group in methods.items():
-        varying = [k for k in set_keys if len({r[k] for r in group}) > 1]
-        split = varying[1:]
+        counts = {k: len({r[k] for r in group}) for k in set_keys}
+        varying = [k for k in set_keys if counts[k] > 1]
+        steps = max(varying, key=lambda k: counts[k], default=None)
+        split = [k for k in varying if k != steps]
         lines = out.setdefault((m, v), {})
         for r in group:
-            label = method + "".join(", %s=%s" % (k[4:], r[k]) for k in split)
+            label = method + "".join(", %s=%s" % (k[4:], r[k] or "default") for k in split)
             lines.setdefault(label, []).append(r)
     return out
 
@@ -57,17 +59,23 @@ def draw(rows, directory, plt):
     groups = panels(rows)
     cols = min(3, len(groups))
     nrows = (len(groups) + cols - 1) // cols
+    most = max(len(lines) for lines in groups.values())
+    height = max(4.2, 0.17 * most + 1.0)
+    styles = ["-", "--", ":", "-."]
     for name, xkey, xlabel, scale in CHARTS:
-        fig, axes = plt.subplots(nrows, cols, figsize=(5.5 * cols, 4.2 * nrows), squeeze=False)
+        fig, axes = plt.subplots(nrows, cols, figsize=(8.5 * cols, height * nrows),
+                                 squeeze=False)
         for ax in axes.flat[len(groups):]:
             ax.set_visible(False)
         for ax, ((m, v), lines) in zip(axes.flat, groups.items()):
-            for label, members in lines.items():
+            for i, (label, members) in enumerate(lines.items()):
                 pts = sorted((number(r[xkey]) * scale, number(r["mse_paper"])) for r in members
                              if number(r[xkey]) is not None and number(r["mse_paper"]) is not None)
                 pts = [(x, y) for x, y in pts if x > 0 and y > 0]  # log axes
                 if pts:
-                    ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o", label=label)
+                    ax.plot([p[0] for p in pts], [p[1] for p in pts], marker="o", markersize=3,
+                            color=plt.cm.tab10(i % 10), linestyle=styles[i // 10 % 4],
+                            label=label)
             ax.set_xscale("log")
             ax.set_yscale("log")
             ax.set_xlabel(xlabel)
@@ -75,7 +83,7 @@ def draw(rows, directory, plt):
             ax.set_title("%s, view %s" % (m, v), fontsize=10)
             ax.grid(True, which="both", alpha=0.3)
             if ax.lines:
-                ax.legend(fontsize=7)
+                ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
         fig.tight_layout()
         final = os.path.join(directory, name)
         temp = os.path.join(directory, "." + name + ".tmp")

@@ -291,3 +291,19 @@ TEST(Sweep, ChartsWithoutMatplotlibAreANoteAndAFailingScriptIsAnError) {
     EXPECT_EQ(reliefsim::testing::CountLines(failing.err), 1) << failing.err;
     EXPECT_NE(failing.err.find("sweep charts: false"), std::string::npos) << failing.err;
 }
+
+TEST(Sweep, TheStudiesOfTheDocsAreValidConfigurations) {
+    // scripts/studies runs these; docs/studies/results.md is their output.
+    int n = 0;
+    for (const auto& e :
+         fs::directory_iterator(fs::path(RS_SOURCE_DIR) / "docs" / "studies")) {
+        if (e.path().extension() != ".json") continue;
+        SCOPED_TRACE(e.path().string());
+        EXPECT_NO_THROW({
+            const auto configs = ParseSweepConfig(Read(e.path()), e.path().string());
+            EXPECT_GT(configs.size(), 10u);
+        });
+        ++n;
+    }
+    EXPECT_EQ(n, 5);
+}
