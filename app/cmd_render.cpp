@@ -13,7 +13,7 @@ namespace {
 struct RenderArgs {
     RenderOptions options;
     std::string out;
-    bool quiet = false;
+    bool quiet = false, groupHeatmaps = false;
 };
 
 void RunRender(RenderArgs& a) {
@@ -21,12 +21,19 @@ void RunRender(RenderArgs& a) {
     const RenderSettings& s = a.options.settings;
     std::vector<std::string> outputs = RenderOutputNames();
     if (!s.reference) std::erase(outputs, std::string("missed_geometry.png"));
+    std::string groupFiles;
+    if (a.groupHeatmaps)
+        for (const LaneGroupHeatmap& g : kLaneGroupHeatmaps)
+            for (const char* kind : {"_trips.png", "_utilisation.png"}) {
+                outputs.push_back(g.prefix + std::string(kind));
+                groupFiles += "," + outputs.back();
+            }
     CheckOutputDirectory("--out", a.out, outputs);
     RequireFrameMemory(s.width, s.height);
     DepthField field = LoadRenderMap(a.options);
     RequireFrameMemory(s.width, s.height);  // what is left once the map is in memory
     RenderOutput out = Render(field, s);
-    WriteRenderOutputs(a.out, out, s, field);
+    WriteRenderOutputs(a.out, out, s, field, a.groupHeatmaps);
     if (!a.quiet) {
         const FrameSummary& m = out.summary;
         std::cout << "reliefsim render: " << s.method << " on " << field.name << " at "
@@ -38,7 +45,7 @@ void RunRender(RenderArgs& a) {
                   << "wrote " << a.out
                   << "/{color.png,iterations.png,fetches.png,record.exr,metrics.json,"
                      "warp_trips.png,warp_utilisation.png"
-                  << (s.reference ? ",missed_geometry.png" : "") << "}\n";
+                  << (s.reference ? ",missed_geometry.png" : "") << groupFiles << "}\n";
     }
 }
 
@@ -56,6 +63,10 @@ void RegisterRenderCommand(CLI::App& root) {
                     "output directory (created with its parents; the outputs replaced)")
         ->required();
     cmd->add_flag("--quiet", a->quiet, "print nothing on success");
+    cmd->add_flag(
+        "--group-heatmaps", a->groupHeatmaps,
+        "also write {quad,group4x2,wave}_{trips,utilisation}.png: the heatmaps of "
+        "the 2x2 quads, llvmpipe's 4x2 groups and 64-lane 8x8 waves");
     cmd->callback([a] { RunRender(*a); });
 }
 

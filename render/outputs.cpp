@@ -120,7 +120,8 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
 }
 
 void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
-                        const RenderSettings& s, const DepthField& field) {
+                        const RenderSettings& s, const DepthField& field,
+                        bool allLaneGroups) {
     if (outDir.empty()) throw Error("--out: empty; give a directory");
     const fs::path dir(outDir);
     std::error_code ec;
@@ -136,6 +137,11 @@ void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
                              "metrics.json", "warp_trips.png", "warp_utilisation.png"})
         outputs.Add(dest(name));
     if (out.hasReference) outputs.Add(dest("missed_geometry.png"));
+    if (allLaneGroups)
+        for (const LaneGroupHeatmap& g : kLaneGroupHeatmaps) {
+            outputs.Add(dest((std::string(g.prefix) + "_trips.png").c_str()));
+            outputs.Add(dest((std::string(g.prefix) + "_utilisation.png").c_str()));
+        }
     const FrameRecord& r = out.record;
     const int w = r.width, h = r.height;
     const size_t n = size_t(w) * size_t(h);
@@ -155,8 +161,8 @@ void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
     // The 32-lane warps (8x4) of the frame, split by triangle as the driver executes
     // them.
     const Camera camera = SceneCamera(s);
-    const LaneGroupMap warps =
-        LaneGroups(r, PiecePerPixel(MakePlane(s.tiling), camera, w, h), 8, 4);
+    const std::vector<int32_t> piece = PiecePerPixel(MakePlane(s.tiling), camera, w, h);
+    const LaneGroupMap warps = LaneGroups(r, piece, 8, 4);
     WriteHeatmapPng(dest("warp_trips.png"), warps.trips.data(), mask.data(), w, h,
                     {s.fetchScaleMin, s.fetchScaleMax, "inferno",
                      "trips of the pixel's 8x4 warp, " + s.method},
@@ -164,6 +170,21 @@ void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
     WriteHeatmapPng(dest("warp_utilisation.png"), warps.utilisation.data(), mask.data(),
                     w, h, {0.0f, 1.0f, "viridis", "lane utilisation of the 8x4 warp"},
                     &outputs);
+    if (allLaneGroups)
+        for (const LaneGroupHeatmap& g : kLaneGroupHeatmaps) {
+            const LaneGroupMap m = LaneGroups(r, piece, g.width, g.height);
+            const std::string prefix = g.prefix;
+            WriteHeatmapPng(
+                dest((prefix + "_trips.png").c_str()), m.trips.data(), mask.data(), w, h,
+                {s.fetchScaleMin, s.fetchScaleMax, "inferno",
+                 std::string("trips of the pixel's ") + g.what + ", " + s.method},
+                &outputs);
+            WriteHeatmapPng(
+                dest((prefix + "_utilisation.png").c_str()), m.utilisation.data(),
+                mask.data(), w, h,
+                {0.0f, 1.0f, "viridis", std::string("lane utilisation of the ") + g.what},
+                &outputs);
+        }
     WriteColorPng(dest("color.png"), out.color.data(), w, h, &outputs);
     WriteHeatmapPng(dest("iterations.png"), iters.data(), mask.data(), w, h,
                     {s.iterScaleMin, s.iterScaleMax, "inferno",

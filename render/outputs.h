@@ -22,7 +22,22 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& settin
 /// call created. Files in outDir that are not outputs are never touched. Missing folders
 /// are created as mkdir does (mode 0777 & ~umask). Every file but metrics.json's "timing"
 /// is byte-identical for equal inputs and any thread count.
+/// With allLaneGroups, also the trips and lane-utilisation heatmaps of the other lane
+/// groups (kLaneGroupHeatmaps), beside warp_trips.png and warp_utilisation.png.
 void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
-                        const RenderSettings& settings, const DepthField& field);
+                        const RenderSettings& settings, const DepthField& field,
+                        bool allLaneGroups = false);
+
+/// The lane groups whose heatmaps `render --group-heatmaps` adds: file prefix, width and
+/// height in pixels (docs/exact.md "Lane groups"). The 8x4 warp's are always written.
+struct LaneGroupHeatmap {
+    const char* prefix;
+    int width, height;
+    const char* what;
+};
+inline constexpr LaneGroupHeatmap kLaneGroupHeatmaps[] = {
+    {"quad", 2, 2, "2x2 quad"},
+    {"group4x2", 4, 2, "llvmpipe 4x2 group"},
+    {"wave", 8, 8, "8x8 64-lane wave"}};
 
 }  // namespace reliefsim

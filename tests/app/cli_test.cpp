@@ -64,6 +64,27 @@ TEST(Cli, RenderWritesTheFiveOutputs) {
          {"color.png", "iterations.png", "fetches.png", "record.exr", "metrics.json",
           "warp_trips.png", "warp_utilisation.png", "missed_geometry.png"})
         EXPECT_TRUE(fs::exists(d / "o" / name)) << name;
+    const char* groups[] = {"quad_trips.png",     "quad_utilisation.png",
+                            "group4x2_trips.png", "group4x2_utilisation.png",
+                            "wave_trips.png",     "wave_utilisation.png"};
+    for (const char* name : groups) EXPECT_FALSE(fs::exists(d / "o" / name)) << name;
+    // --group-heatmaps adds the other lane groups' heatmaps, and says so.
+    r = RunCli("render --map builtin:shapes:64 --size 64x48 --group-heatmaps --out " +
+                   (d / "o").string(),
+               d);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    for (const char* name : groups) {
+        EXPECT_TRUE(fs::exists(d / "o" / name)) << name;
+        EXPECT_NE(r.out.find(name), std::string::npos) << name;
+    }
+    // A folder where one of them goes: one error, nothing written.
+    fs::create_directories(d / "p" / "wave_trips.png");
+    r = RunCli("render --map builtin:shapes:64 --size 64x48 --group-heatmaps --out " +
+                   (d / "p").string(),
+               d);
+    EXPECT_NE(r.exitCode, 0);
+    EXPECT_NE(r.err.find("wave_trips.png"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(d / "p" / "color.png"));
 }
 
 TEST(Cli, TracePrintsEveryFetchOfThePixel) {

@@ -6,6 +6,8 @@
 #include <fstream>
 
 #include "core/error.h"
+#include "metrics/lane_groups.h"
+#include "raster/viewport_pieces.h"
 #include "render/outputs.h"
 #include "render/trace.h"
 #include "texture/procedural.h"
@@ -211,4 +213,37 @@ TEST(Render, LambertShadingFollowsTheLight) {
     EXPECT_GT(covered, 1000u);
     s.lightDir = {0.0f, 1.0f, 0.0f};
     EXPECT_THROW(ValidateSettings(s), Error);
+}
+
+// The heatmaps of `render --group-heatmaps` are the driver's executed lane cost: each
+// group kind's totals equal metrics.json's lane_cost_*, and the groups nest (a 2x2 quad
+// lies in its 4x2 group, which lies in its 8x4 warp, which lies in its 8x8 wave), so a
+// pixel's trips can only grow from one to the next.
+TEST(Render, GroupHeatmapsAreTheExecutedLaneCostAndNest) {
+    DepthField f = MakeBuiltinMap("builtin:shapes:64");
+    RenderSettings s = Small("csm");
+    s.width = 72, s.height = 52;  // partial groups at the right and bottom
+    const RenderOutput out = Render(f, s);
+    const std::vector<int32_t> piece = PiecePerPixel(MakePlane(s.tiling), SceneCamera(s),
+                                                     out.record.width, out.record.height);
+    const LaneGroupMap quad = LaneGroups(out.record, piece, 2, 2);
+    const LaneGroupMap g4x2 = LaneGroups(out.record, piece, 4, 2);
+    const LaneGroupMap warp = LaneGroups(out.record, piece, 8, 4);
+    const LaneGroupMap wave = LaneGroups(out.record, piece, 8, 8);
+    EXPECT_EQ(quad.totalCost, out.laneCost.quad);
+    EXPECT_EQ(g4x2.totalCost, out.laneCost.group4x2);
+    EXPECT_EQ(warp.totalCost, out.laneCost.warp32);
+    EXPECT_EQ(wave.totalCost, out.laneCost.wave64);
+    ASSERT_EQ(std::size(kLaneGroupHeatmaps), 3u);
+    EXPECT_EQ(kLaneGroupHeatmaps[1].width * kLaneGroupHeatmaps[1].height, 8);
+    size_t covered = 0;
+    for (size_t i = 0; i < quad.trips.size(); ++i) {
+        if (!out.record.Covered(i)) continue;
+        ++covered;
+        EXPECT_GE(quad.trips[i], float(out.record.nFetches[i])) << i;
+        EXPECT_GE(g4x2.trips[i], quad.trips[i]) << i;
+        EXPECT_GE(warp.trips[i], g4x2.trips[i]) << i;
+        EXPECT_GE(wave.trips[i], warp.trips[i]) << i;
+    }
+    EXPECT_GT(covered, 1000u);
 }
