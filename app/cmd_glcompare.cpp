@@ -114,7 +114,7 @@ void PrintText(const GlCompareResult& r, const GlCompareArgs& a,
                 "); flags differ at %" PRIu64 "\n",
                 c.pixels, c.cpuOnly + c.glOnly, c.cpuOnly, c.glOnly, c.flagsDiffer);
     auto row = [&](const char* name, const FieldAgreement& f, const char* unit) {
-        std::printf("  %-11s %8.3f%% identical (%" PRIu64 " / %" PRIu64
+        std::printf("  %-16s %8.3f%% identical (%" PRIu64 " / %" PRIu64
                     "), max diff %" PRIu64 " %s\n",
                     name, 100.0 * f.fraction, f.identical, c.pixels, f.maxDiff, unit);
     };
@@ -122,6 +122,18 @@ void PrintText(const GlCompareResult& r, const GlCompareArgs& a,
     row("hit_depth", c.hitDepth, "ulp");
     row("iterations", c.iterations, "");
     row("fetches", c.fetches, "");
+    if (r.shadow.on) {
+        const ShadowComparison& sh = r.shadow;
+        auto share = [&](uint64_t n) {
+            return sh.pixels ? 100.0 * double(n) / double(sh.pixels) : 100.0;
+        };
+        std::printf("  %-16s %8.3f%% identical (%" PRIu64 " / %" PRIu64 ")\n",
+                    "shadow_fetches", share(sh.fetchesIdentical), sh.fetchesIdentical,
+                    sh.pixels);
+        std::printf("  %-16s %8.3f%% identical (%" PRIu64 " / %" PRIu64 ")\n",
+                    "light_visibility", share(sh.visibilityIdentical),
+                    sh.visibilityIdentical, sh.pixels);
+    }
     if (r.gl.lanes.available) {
         const LaneCostCheck& l = r.laneCost;
         std::printf(
@@ -208,6 +220,7 @@ GlScene MakeGlScene(const RenderSettings& s) {
     g.format = s.sampler.precision == Precision::Llvmpipe8 ? TextureFormat::R8
                                                            : TextureFormat::R32F;
     g.kernel = SettingsKernel(s);
+    g.shadow = SceneShadow(s);
     return g;
 }
 
@@ -224,6 +237,23 @@ std::vector<int16_t> SceneTriangles(const RenderSettings& s) {
                             camera, s.width, s.height);
 }
 
+ShadowComparison CompareShadows(const RenderOutput& cpu, const GlFrame& gl) {
+    ShadowComparison c;
+    c.on = !cpu.shadowFetches.empty();
+    if (!c.on) return c;
+    if (gl.shadowFetches.size() != cpu.shadowFetches.size())
+        throw Error("glcompare: the GL frame has no light-ray record");
+    const FrameRecord& a = cpu.record;
+    const FrameRecord& b = gl.record;
+    for (size_t i = 0; i < cpu.shadowFetches.size(); ++i) {
+        if (!a.Covered(i) || !b.Covered(i)) continue;
+        ++c.pixels;
+        c.fetchesIdentical += cpu.shadowFetches[i] == gl.shadowFetches[i];
+        c.visibilityIdentical += UlpDistance(cpu.visibility[i], gl.visibility[i]) == 0;
+    }
+    return c;
+}
+
 GlCompareResult RunGlCompare(const DepthField& field, const RenderSettings& s,
                              GlReference& gl) {
     GlCompareResult r;
@@ -238,6 +268,7 @@ GlCompareResult RunGlCompare(const DepthField& field, const RenderSettings& s,
     r.gl = gl.Render(field, scene);
     r.renderer = gl.Renderer();
     r.comparison = CompareRecords(r.cpu.record, r.gl.record);
+    r.shadow = CompareShadows(r.cpu, r.gl);
     // Run 2, the lanes: the plane pre-clipped into the pieces llvmpipe would rasterize,
     // with the in-shader trip counters; the model takes each pixel's fetches from the C++
     // kernel.
@@ -321,7 +352,16 @@ nlohmann::json GlCompareJson(const GlCompareResult& r, const RenderOptions& o,
                      {"fetches", c.fetches.maxDiff}};
     j["coverage"] = {{"cpu_only", c.cpuOnly}, {"gl_only", c.glOnly}};
     j["flags_differ"] = c.flagsDiffer;
-    j["all_identical"] = c.AllIdentical();
+    if (r.shadow.on) {
+        const ShadowComparison& sh = r.shadow;
+        auto share = [&](uint64_t n) {
+            return sh.pixels ? double(n) / double(sh.pixels) : 1.0;
+        };
+        j["identical"]["shadow_fetches"] = share(sh.fetchesIdentical);
+        j["identical"]["light_visibility"] = share(sh.visibilityIdentical);
+        j["shadow"] = std::string(kShadowNames.Name(s.shadow));
+    }
+    j["all_identical"] = c.AllIdentical() && (!r.shadow.on || r.shadow.Identical());
     nlohmann::json diffs = nlohmann::json::array();
     for (const glm::ivec2& p : c.firstDiffs)
         diffs.push_back({{"x", p.x}, {"y", p.y}, {"trace", TraceCommand(o, p.x, p.y)}});

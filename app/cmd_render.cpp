@@ -21,6 +21,7 @@ void RunRender(RenderArgs& a) {
     const RenderSettings& s = a.options.settings;
     std::vector<std::string> outputs = RenderOutputNames();
     if (!s.reference) std::erase(outputs, std::string("missed_geometry.png"));
+    if (s.shadow != ShadowKind::None) outputs.push_back("shadow_fetches.png");
     std::string groupFiles;
     if (a.groupHeatmaps)
         for (const LaneGroupHeatmap& g : kLaneGroupHeatmaps)
@@ -45,7 +46,9 @@ void RunRender(RenderArgs& a) {
                   << "wrote " << a.out
                   << "/{color.png,iterations.png,fetches.png,record.exr,metrics.json,"
                      "warp_trips.png,warp_utilisation.png"
-                  << (s.reference ? ",missed_geometry.png" : "") << groupFiles << "}\n";
+                  << (s.reference ? ",missed_geometry.png" : "")
+                  << (s.shadow != ShadowKind::None ? ",shadow_fetches.png" : "")
+                  << groupFiles << "}\n";
     }
 }
 

@@ -27,10 +27,20 @@ Textures BindSceneMaps(GlScene& scene, const DepthField& field,
 /// The C++ triangle index of each pixel (see TrianglePerPixel) for the settings' scene.
 std::vector<int16_t> SceneTriangles(const RenderSettings& settings);
 
+/// The light rays of both paths (--shadow), over the pixels covered by both.
+struct ShadowComparison {
+    bool on = false;  ///< the settings have a light-ray kernel
+    uint64_t pixels = 0, fetchesIdentical = 0, visibilityIdentical = 0;
+    bool Identical() const {
+        return fetchesIdentical == pixels && visibilityIdentical == pixels;
+    }
+};
+
 struct GlCompareResult {
     RenderOutput cpu;
     GlFrame gl;
     RecordComparison comparison;
+    ShadowComparison shadow;
     LaneCostCheck laneCost;  ///< valid when gl.lanes.available
     std::string renderer;
 };
@@ -39,7 +49,11 @@ struct GlCompareResult {
 GlCompareResult RunGlCompare(const DepthField& field, const RenderSettings& settings,
                              GlReference& gl);
 
-/// The JSON report: pixels, identical{hit_uv, hit_depth, iterations, fetches}, max_diff,
+/// Compares the light rays' fetches and visibility of both paths (empty arrays: off).
+ShadowComparison CompareShadows(const RenderOutput& cpu, const GlFrame& gl);
+
+/// The JSON report: pixels, identical{hit_uv, hit_depth, iterations, fetches, with
+/// --shadow shadow_fetches and light_visibility}, max_diff,
 /// coverage, first_differences (with trace commands), lane_cost.
 nlohmann::json GlCompareJson(const GlCompareResult& r, const RenderOptions& options,
                              const DepthField& field);

@@ -119,6 +119,18 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
     cmd->add_option("--light-azimuth", o.lightAzimuth,
                     "the light's azimuth, degrees counter-clockwise from +u (default 0 "
                     "when --light-angle is given)");
+    AddEnumOption(cmd, "--shadow", o.settings.shadow, kShadowNames,
+                  "self-shadowing of every hit by a light ray (docs/methods/shadows.md): "
+                  "none, hard (linear search towards the light, --shadow-steps) or soft "
+                  "(Tatarchuk's seven weighted samples, --shadow-softening)");
+    cmd->add_option("--shadow-steps", o.settings.shadowSteps,
+                    "hard shadows: steps of the light ray from the surface to the top")
+        ->capture_default_str()
+        ->check(CLI::Range(1, kMaxShadowSteps));
+    cmd->add_option("--shadow-softening", o.settings.shadowSoftening,
+                    "soft shadows: Tatarchuk's softening (the DirectX SDK sample's 0.58)")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0f, kMaxShadowSoftening));
     AddEnumOption(cmd, "--filter", o.settings.sampler.filter, kFilterNames,
                   "height sampler filter");
     AddEnumOption(cmd, "--wrap", o.settings.sampler.wrap, kWrapModeNames,

@@ -35,9 +35,11 @@ constexpr size_t kMaxConfigurations = 1000000;
 /// The render keys a view, or the top level, may set.
 const std::vector<std::string>& RenderKeys() {
     static const std::vector<std::string> kKeys = {
-        "view_angle", "azimuth",  "distance",       "fov",     "depth_scale", "tiling",
-        "filter",     "wrap",     "texture_format", "threads", "lanes",       "camera",
-        "view_dir",   "light_dir"};
+        "view_angle",      "azimuth",   "distance", "fov",
+        "depth_scale",     "tiling",    "filter",   "wrap",
+        "texture_format",  "threads",   "lanes",    "camera",
+        "view_dir",        "light_dir", "shadow",   "shadow_steps",
+        "shadow_softening"};
     return kKeys;
 }
 
@@ -99,6 +101,15 @@ void ApplyRenderKey(RenderSettings& s, const std::string& key, const ojson& v,
         (key == "threads" ? s.threads : s.lanes) = int(n);
     } else if (key == "camera") {
         s.camera = EnumValue(kCameraNames, v, at);
+    } else if (key == "shadow") {
+        s.shadow = EnumValue(kShadowNames, v, at);
+    } else if (key == "shadow_steps") {
+        const double n = Number(v, at);
+        if (!(std::abs(n) <= 1e6) || n != double(int(n)))
+            Bad(at, "expected an integer in [-1e6, 1e6], got " + v.dump());
+        s.shadowSteps = int(n);
+    } else if (key == "shadow_softening") {
+        s.shadowSoftening = float(Number(v, at));
     } else if (key == "view_dir") {
         if (!v.is_array() || v.size() != 3)
             Bad(at, "expected [X, Y, Z], got " + v.dump());

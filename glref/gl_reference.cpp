@@ -137,7 +137,8 @@ struct GlReference::Impl {
            ssbo = 0, traceBuffer = 0, coneSampler = 0;
     bool tracing = false;
     static constexpr int kTraceCapacity = 4096;
-    GLuint targets[2] = {0, 0};
+    GLuint targets[3] = {0, 0, 0};
+    bool shadows = false;  ///< the scene's light-ray kernel is on: read target 2
     GLsizei indexCount = 0;
     int width = 0, height = 0;
     Filter filter = Filter::Bilinear;
@@ -156,10 +157,10 @@ struct GlReference::Impl {
         if (coneArray) glDeleteTextures(1, &coneArray);
         if (coneSampler) glDeleteSamplers(1, &coneSampler);
         if (fbo) glDeleteFramebuffers(1, &fbo);
-        if (targets[0]) glDeleteTextures(2, targets);
+        if (targets[0]) glDeleteTextures(3, targets);
         program = vao = vbo = ibo = ssbo = traceBuffer = texture = coneArray = fbo =
             coneSampler = 0;
-        targets[0] = targets[1] = 0;
+        targets[0] = targets[1] = targets[2] = 0;
     }
 };
 
@@ -288,6 +289,7 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     fs += "// ---- refine.glsl\n" + std::string(EmbeddedGlsl("refine.glsl"));
     fs += "// ---- " + std::string(scene.kernel.Info().glslFile) + "\n" +
           std::string(EmbeddedGlsl(scene.kernel.Info().glslFile));
+    fs += "// ---- shadow.glsl\n" + std::string(EmbeddedGlsl("shadow.glsl"));
     fs += "// ---- record_main.glsl\n" + std::string(EmbeddedGlsl("record_main.glsl"));
     m.fragmentSource = fs;
     const std::string vs =
@@ -441,19 +443,20 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
         }
     }
 
-    // Targets: two RGBA32F colour attachments, no depth buffer (the plane's two triangles
-    // do not overlap, so the C++ depth test removes nothing).
+    // Targets: three RGBA32F colour attachments, no depth buffer (the plane's two
+    // triangles do not overlap, so the C++ depth test removes nothing).
     glGenFramebuffers(1, &m.fbo);
     glBindFramebuffer(GL_FRAMEBUFFER, m.fbo);
-    glGenTextures(2, m.targets);
-    for (int k = 0; k < 2; ++k) {
+    glGenTextures(3, m.targets);
+    for (int k = 0; k < 3; ++k) {
         glBindTexture(GL_TEXTURE_2D, m.targets[k]);
         glTexStorage2D(GL_TEXTURE_2D, 1, GL_RGBA32F, scene.width, scene.height);
         glFramebufferTexture2D(GL_FRAMEBUFFER, GLenum(GL_COLOR_ATTACHMENT0 + k),
                                GL_TEXTURE_2D, m.targets[k], 0);
     }
-    const GLenum bufs[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-    glDrawBuffers(2, bufs);
+    const GLenum bufs[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1,
+                            GL_COLOR_ATTACHMENT2};
+    glDrawBuffers(3, bufs);
     if (glCheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         throw Error("GL: RGBA32F framebuffer incomplete");
     glBindTexture(GL_TEXTURE_2D, m.texture);
@@ -485,6 +488,13 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     glUniform1i(loc("uConeSquared"), scene.coneSquared ? 1 : 0);
     glUniform2f(loc("uMapSize"), float(field.width), float(field.height));
     UploadKernelUniforms(m.program, scene.kernel);
+    const ShadowJob& sh = scene.shadow;
+    glUniform1i(loc("uShadow"), int(sh.kind));
+    glUniform1i(loc("uShadowSteps"), sh.steps);
+    glUniform1f(loc("uShadowStepInv"), sh.stepInv);
+    glUniform1f(loc("uShadowSoftening"), sh.softening);
+    glUniform2f(loc("uLightStep"), sh.lu, sh.lv);
+    m.shadows = sh.kind != ShadowKind::None;
 
     m.lanesTemplate = LaneMeasurement{};
     if (m.measureLanes) {
@@ -511,6 +521,7 @@ void GlReference::DrawAndFinish() {
     const float zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
     glClearBufferfv(GL_COLOR, 0, zero);
     glClearBufferfv(GL_COLOR, 1, zero);
+    glClearBufferfv(GL_COLOR, 2, zero);
     if (m.measureLanes) {
         const LaneMeasurement& l = m.lanesTemplate;
         std::vector<uint32_t> init(
@@ -544,10 +555,20 @@ GlFrame GlReference::ReadBack() {
     glReadPixels(0, 0, w, h, GL_RGBA, GL_FLOAT, hit.data());
     glReadBuffer(GL_COLOR_ATTACHMENT1);
     glReadPixels(0, 0, w, h, GL_RGBA, GL_FLOAT, counts.data());
+    std::vector<float> shadow;
+    if (m.shadows) {
+        shadow.resize(hit.size());
+        glReadBuffer(GL_COLOR_ATTACHMENT2);
+        glReadPixels(0, 0, w, h, GL_RGBA, GL_FLOAT, shadow.data());
+    }
     GlFrame g;
     FrameRecord& r = g.record;
     r.Resize(w, h);
     g.triangle.assign(size_t(w) * size_t(h), int16_t(-1));
+    if (m.shadows) {
+        g.shadowFetches.assign(size_t(w) * size_t(h), 0u);
+        g.visibility.assign(size_t(w) * size_t(h), 0.0f);
+    }
     const uint32_t texelsPerFetch = m.filter == Filter::Nearest ? 1u : 4u;
     for (int glY = 0; glY < h; ++glY) {
         const int y = h - 1 - glY;  // our row 0 is the top; GL's row 0 the bottom
@@ -565,6 +586,10 @@ GlFrame GlReference::ReadBack() {
             r.nFetches[i] = uint32_t(c[2]);
             r.nTexelReads[i] = r.nFetches[i] * texelsPerFetch;
             g.triangle[i] = int16_t(c[3] - 1.0f);
+            if (m.shadows) {
+                g.visibility[i] = shadow[src + 0];
+                g.shadowFetches[i] = uint32_t(shadow[src + 1]);
+            }
         }
     }
     g.lanes = m.lanesTemplate;

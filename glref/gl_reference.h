@@ -14,6 +14,7 @@
 
 #include "core/record.h"
 #include "kernels/registry.h"
+#include "kernels/shadow_job.h"
 #include "raster/mesh.h"
 #include "render/view_ray.h"
 #include "texture/depth_field.h"
@@ -46,6 +47,7 @@ struct GlScene {
     /// plain height texture. Required when the kernel reads a map.
     std::vector<std::shared_ptr<const DepthField>> cone;
     bool coneSquared = false;
+    ShadowJob shadow;          ///< the light-ray kernel of every hit (shadow.glsl)
     bool measureLanes = true;  ///< count executed loop trips per lane group (slower)
     int traceX = -1,
         traceY = -1;  ///< pixel (row 0 at the top) whose fetches are traced; -1: none
@@ -76,6 +78,10 @@ struct GlFrame {
     LaneMeasurement lanes;
     /// The traced pixel's fetches in order: (u, v, sampled depth, ray t).
     std::vector<glm::vec4> trace;
+    /// With GlScene::shadow on (else empty): per pixel, the light ray's fetches and the
+    /// light's visibility (RenderOutput's twins).
+    std::vector<uint32_t> shadowFetches;
+    std::vector<float> visibility;
 };
 
 /// An EGL surfaceless OpenGL 4.5 core context on llvmpipe. Sets LIBGL_ALWAYS_SOFTWARE=1

@@ -1,8 +1,9 @@
 // The record fragment shader's main: pixel -> ray (view_ray.glsl), the kernel twin, and the
-// per-pixel record into two RGBA32F targets.
+// per-pixel record into three RGBA32F targets.
 
 layout(location = 0) out vec4 oHit;     // hit u, hit v, hit depth, flags (core/record.h)
 layout(location = 1) out vec4 oCounts;  // coarse, refine, fetches, gl_PrimitiveID + 1
+layout(location = 2) out vec4 oShadow;  // light visibility, light-ray fetches (shadow.glsl)
 
 void main() {
     // gl_FragCoord.xy is the pixel centre (x + 0.5, y + 0.5) with y up; our row 0 is the top.
@@ -21,4 +22,5 @@ void main() {
     oHit = vec4(m.uvHit, m.depthHit, flags);
     oCounts = vec4(float(m.nCoarse), float(m.nRefine), float(m.nFetches),
                    float(gl_PrimitiveID + 1));
+    oShadow = vec4(LightVisibility(m.uvHit, m.hit), 0.0, 0.0);
 }

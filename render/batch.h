@@ -16,6 +16,7 @@
 #include <string>
 
 #include "kernels/registry.h"
+#include "kernels/shadow.h"
 #include "render/view_ray.h"
 #include "texture/lane_sampler.h"
 
@@ -35,6 +36,10 @@ struct LaneBatch {
     uint16_t *nCoarse = nullptr, *nRefine = nullptr;
     uint32_t *fetches = nullptr, *texelReads = nullptr;
     uint8_t* flags = nullptr;  ///< kFlagNoHit | kFlagBudgetExhausted (core/record.h)
+    /// With BatchJob::shadow on: per lane, the light-ray fetches and the light's
+    /// visibility at the hit (kernels/shadow.h); both may be null.
+    uint32_t* shadowFetches = nullptr;
+    float* visibility = nullptr;
 };
 
 /// One fetch of a traced lane: where, at which ray depth, what came back.
@@ -60,6 +65,7 @@ struct BatchJob {
     float slopeScale = 1.0f;             ///< depth scale x tiling, for shading
     /// Unit tangent-space direction towards the light, for shading (SceneLight).
     glm::vec3 light = UnitLight({-0.4f, -0.5f, 0.77f});
+    ShadowJob shadow;  ///< the light-ray kernel of every hit (none: no shadows)
 };
 
 using BatchFn = void (*)(const BatchJob& job, LaneBatch& batch);

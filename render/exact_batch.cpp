@@ -33,10 +33,16 @@ void RunExactBatch(const BatchJob& job, LaneBatch& b) {
         b.fetches[i] = 0;
         b.texelReads[i] = 0;
         b.flags[i] = 0;  // the surface is always met, by t = 1 at the latest
+        // The light ray of the exact hit is the frame's light-ray kernel, counted apart.
+        F shadowFetches(0.0f);
+        const F vis = LightVisibility<L>(tex, job.shadow, F(b.u[i]), F(b.v[i]), M(true),
+                                         shadowFetches);
+        if (b.shadowFetches) b.shadowFetches[i] = uint32_t(shadowFetches[0]);
+        if (b.visibility) b.visibility[i] = vis[0];
         if (!b.rgb) continue;
         F rgb[3] = {F(0.0f), F(0.0f), F(0.0f)};
         detail::ShadeHit<L>(tex, job.slopeScale, job.light, F(b.u[i]), F(b.v[i]),
-                            F(b.depth[i]), M(true), M(true), rgb);
+                            F(b.depth[i]), M(true), M(true), vis, rgb);
         for (int c = 0; c < 3; ++c) b.rgb[3 * i + c] = rgb[c][0];
     }
 }

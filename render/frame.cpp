@@ -48,8 +48,15 @@ class FrameProgram {
     static constexpr bool kReadsAttributes = false;  // rays come from PixelToRay
 
     FrameProgram(const BatchJob& job, BatchFn run, FrameRecord& record,
-                 std::vector<float>& color, std::vector<TileTotals>& tiles)
-        : job_(job), run_(run), record_(record), color_(color), tiles_(tiles) {}
+                 std::vector<float>& color, std::vector<TileTotals>& tiles,
+                 std::vector<uint32_t>& shadowFetches, std::vector<float>& visibility)
+        : job_(job),
+          run_(run),
+          record_(record),
+          color_(color),
+          tiles_(tiles),
+          shadowFetches_(shadowFetches),
+          visibility_(visibility) {}
 
     void ShadeQuad(const QuadFragment& q, int tileIndex) {
         Scratch& s = scratch_.local();
@@ -80,8 +87,9 @@ class FrameProgram {
         std::vector<int32_t> px, py;
         std::vector<float> u, v, depth, rgb;
         std::vector<uint16_t> nCoarse, nRefine;
-        std::vector<uint32_t> fetches, texels;
+        std::vector<uint32_t> fetches, texels, shadowFetches;
         std::vector<uint8_t> flags;
+        std::vector<float> visibility;
         std::vector<uint32_t> group4x2 = std::vector<uint32_t>((kTileSize / 4) *
                                                                (kTileSize / 2)),
                               warp32 = std::vector<uint32_t>((kTileSize / 8) *
@@ -110,6 +118,11 @@ class FrameProgram {
         b.nCoarse = s.nCoarse.data(), b.nRefine = s.nRefine.data();
         b.fetches = s.fetches.data(), b.texelReads = s.texels.data();
         b.flags = s.flags.data();
+        const bool shadows = job_.shadow.kind != ShadowKind::None;
+        if (shadows) {
+            s.shadowFetches.resize(n), s.visibility.resize(n);
+            b.shadowFetches = s.shadowFetches.data(), b.visibility = s.visibility.data();
+        }
         run_(job_, b);
 
         TileTotals& tile = tiles_[size_t(tileIndex)];
@@ -158,6 +171,10 @@ class FrameProgram {
                 flags[at] = uint8_t(kFlagCovered | bFlags[i]);
                 for (int c = 0; c < 3; ++c)
                     color[3 * at + size_t(c)] = bRgb[3 * i + size_t(c)];
+                if (shadows) {
+                    shadowFetches_[at] = s.shadowFetches[i];
+                    visibility_[at] = s.visibility[i];
+                }
             }
             // A lane leaves the loop for good, so a group runs as many trips as its
             // longest-running covered lane.
@@ -182,6 +199,8 @@ class FrameProgram {
     FrameRecord& record_;
     std::vector<float>& color_;
     std::vector<TileTotals>& tiles_;
+    std::vector<uint32_t>& shadowFetches_;
+    std::vector<float>& visibility_;
     tbb::enumerable_thread_specific<Scratch> scratch_;
 };
 
@@ -224,11 +243,17 @@ RenderOutput Render(const DepthField& field, const RenderSettings& s) {
     const Camera camera = SceneCamera(s);
     const Mesh mesh = MakePlane(s.tiling);
     job.view = &uniforms;
-    job.slopeScale = s.depthScale * s.tiling;
+    job.slopeScale = SceneSlopeScale(s);
     job.light = SceneLight(s);
+    job.shadow = SceneShadow(s);
 
     auto start = std::chrono::steady_clock::now();
-    FrameProgram program(job, run, out.record, out.color, tiles);
+    if (s.shadow != ShadowKind::None) {
+        out.shadowFetches.assign(size_t(s.width) * size_t(s.height), 0u);
+        out.visibility.assign(size_t(s.width) * size_t(s.height), 0.0f);
+    }
+    FrameProgram program(job, run, out.record, out.color, tiles, out.shadowFetches,
+                         out.visibility);
     const RasterStats stats = RasterizeFrame(mesh, camera, s.width, s.height, program);
     out.frameSeconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -50,6 +50,11 @@ struct RenderOutput {
     int lanes = 0;              ///< lane width of the fragment driver (timing only)
     std::string isa;            ///< its instruction set (timing only)
     LaneCosts laneCost;
+    /// With settings.shadow (else empty), per pixel (row-major, 0 where not covered): the
+    /// light ray's fetches, counted apart from the view ray's (record.exr
+    /// shadow_fetches), and the light's visibility at the hit in [0, 1].
+    std::vector<uint32_t> shadowFetches;
+    std::vector<float> visibility;
     bool hasReference = false;  ///< settings.reference: the two below are set
     ReferenceRecord reference;
     ReferenceSummary referenceSummary;

@@ -53,6 +53,10 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
                          ShortestDouble(s.viewDir.z)};
     j["light_dir"] = {ShortestDouble(s.lightDir.x), ShortestDouble(s.lightDir.y),
                       ShortestDouble(s.lightDir.z)};
+    j["shadow"] = std::string(kShadowNames.Name(s.shadow));
+    if (s.shadow == ShadowKind::Hard) j["shadow_steps"] = s.shadowSteps;
+    if (s.shadow == ShadowKind::Soft)
+        j["shadow_softening"] = ShortestDouble(s.shadowSoftening);
     j["view_angle"] = ShortestDouble(s.viewAngle);
     j["azimuth"] = ShortestDouble(s.azimuth);
     j["distance"] = ShortestDouble(s.distance);
@@ -78,6 +82,27 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
     j["helper_lanes"] = out.record.nHelperLanes;
     j["helper_fetches"] = out.record.nHelperFetches;
     j["helper_texel_reads"] = out.record.nHelperTexelReads;
+    {
+        // The light rays' fetches, counted apart from the view rays' (0 without shadows),
+        // and the mean light visibility of the covered pixels that hit.
+        uint64_t total = 0, maxFetches = 0, lit = 0;
+        double visibility = 0.0;
+        for (size_t i = 0; i < out.shadowFetches.size(); ++i) {
+            if (!out.record.Covered(i)) continue;
+            total += out.shadowFetches[i];
+            maxFetches = std::max<uint64_t>(maxFetches, out.shadowFetches[i]);
+            if (out.record.flags[i] & kFlagNoHit) continue;
+            visibility += double(out.visibility[i]);
+            ++lit;
+        }
+        j["avg_shadow_fetches"] =
+            m.coveredPixels ? double(total) / double(m.coveredPixels) : 0.0;
+        if (s.shadow != ShadowKind::None) {
+            j["total_shadow_fetches"] = total;
+            j["max_shadow_fetches"] = maxFetches;
+            j["avg_light_visibility"] = lit ? visibility / double(lit) : 1.0;
+        }
+    }
     j["lane_fetches_4x2"] = m.laneFetches4x2;
     j["lane_fetches_8x4"] = m.laneFetches8x4;
     j["heatmap_scale"] = {
@@ -137,6 +162,8 @@ void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
                              "metrics.json", "warp_trips.png", "warp_utilisation.png"})
         outputs.Add(dest(name));
     if (out.hasReference) outputs.Add(dest("missed_geometry.png"));
+    const bool shadows = !out.shadowFetches.empty();
+    if (shadows) outputs.Add(dest("shadow_fetches.png"));
     if (allLaneGroups)
         for (const LaneGroupHeatmap& g : kLaneGroupHeatmaps) {
             outputs.Add(dest((std::string(g.prefix) + "_trips.png").c_str()));
@@ -204,6 +231,17 @@ void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
                                         {"texel_reads", nullptr, r.nTexelReads.data()},
                                         {"flags", nullptr, flags.data()},
                                         {"error_paper", err.data(), nullptr}};
+    std::vector<float> shadowHeat;
+    if (shadows) {
+        channels.push_back({"shadow_fetches", nullptr, out.shadowFetches.data()});
+        channels.push_back({"light_visibility", out.visibility.data(), nullptr});
+        shadowHeat.assign(out.shadowFetches.begin(), out.shadowFetches.end());
+        WriteHeatmapPng(
+            dest("shadow_fetches.png"), shadowHeat.data(), mask.data(), w, h,
+            {s.fetchScaleMin, s.fetchScaleMax, "inferno",
+             "light-ray fetches, " + std::string(kShadowNames.Name(s.shadow))},
+            &outputs);
+    }
     std::vector<float> depthError, uvError, missedRgb;
     std::vector<uint32_t> missed;
     if (out.hasReference) {

@@ -38,8 +38,9 @@ ReferenceRecord RenderReference(const DepthField& field, const RenderSettings& s
     job.textures = BindTextures(field, shading);
     job.params = &surface;
     job.view = &view;
-    job.slopeScale = s.depthScale * s.tiling;
+    job.slopeScale = SceneSlopeScale(s);
     job.light = SceneLight(s);
+    job.shadow = SceneShadow(s);
     const double step = CoarseStepDepth(s);
     const int w = record.width, h = record.height;
     const size_t n = size_t(w) * size_t(h);

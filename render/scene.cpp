@@ -44,6 +44,12 @@ void ValidateSettings(const RenderSettings& s) {
     if (!std::isfinite(s.fetchScaleMin) || !std::isfinite(s.fetchScaleMax) ||
         !(s.fetchScaleMax > s.fetchScaleMin))
         bad("--fetches-scale: MIN and MAX must be finite with MAX > MIN");
+    if (s.shadowSteps < 1 || s.shadowSteps > kMaxShadowSteps)
+        bad("--shadow-steps " + std::to_string(s.shadowSteps) + ": must be in [1, " +
+            std::to_string(kMaxShadowSteps) + "]");
+    if (!(s.shadowSoftening >= 0.0f && s.shadowSoftening <= kMaxShadowSoftening))
+        bad("--shadow-softening " + num(s.shadowSoftening) + ": must be in [0, " +
+            num(kMaxShadowSoftening) + "]");
     if (s.camera == CameraKind::Ortho) {
         const glm::vec3 d = s.viewDir;
         const std::string text = num(d.x) + "," + num(d.y) + "," + num(d.z);
@@ -115,6 +121,23 @@ Mesh MakePlane(float tiling) {
 }
 
 glm::vec3 SceneLight(const RenderSettings& s) { return UnitLight(s.lightDir); }
+
+float SceneSlopeScale(const RenderSettings& s) {
+    return s.camera == CameraKind::Ortho ? s.depthScale : s.depthScale * s.tiling;
+}
+
+ShadowJob SceneShadow(const RenderSettings& s) {
+    ShadowJob j;
+    j.kind = s.shadow;
+    j.steps = s.shadowSteps;
+    j.stepInv = 1.0f / float(s.shadowSteps);
+    j.softening = s.shadowSoftening;
+    const glm::vec3 l = SceneLight(s);
+    const float k = SceneSlopeScale(s);
+    j.lu = (l.x / l.z) * k;
+    j.lv = (l.y / l.z) * k;
+    return j;
+}
 
 Kernel SettingsKernel(const RenderSettings& s) {
     const KernelInfo& method = FindMethod(s.method);

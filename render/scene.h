@@ -8,6 +8,7 @@
 
 #include "core/enum_names.h"
 #include "kernels/registry.h"
+#include "kernels/shadow_job.h"
 #include "raster/camera.h"
 #include "raster/mesh.h"
 #include "render/kernel_maps.h"
@@ -51,10 +52,15 @@ struct RenderSettings {
     /// The directional light of the shading: tangent-space direction (x along +u, y along
     /// +v, z the plane normal) from the surface towards the light, Z > 0, any length.
     glm::vec3 lightDir{-0.4f, -0.5f, 0.77f};
-    SamplerState sampler;    ///< height-map filter and wrap
-    KernelMapSettings maps;  ///< the kernel's derived maps (cone kernels)
-    int threads = 0;         ///< worker threads; 0 = all cores
-    int lanes = 0;           ///< fragment-driver lane width; 0 = the widest the CPU runs
+    /// The light-ray kernel of every hit (kernels/shadow.h): none, hard or soft shadows,
+    /// with its parameters (--shadow, --shadow-steps, --shadow-softening).
+    ShadowKind shadow = ShadowKind::None;
+    int shadowSteps = 16;  ///< hard: steps from the surface to the top, [1, 1024]
+    float shadowSoftening = 0.58f;  ///< soft: Tatarchuk's softening, [0, 1000]
+    SamplerState sampler;           ///< height-map filter and wrap
+    KernelMapSettings maps;         ///< the kernel's derived maps (cone kernels)
+    int threads = 0;                ///< worker threads; 0 = all cores
+    int lanes = 0;  ///< fragment-driver lane width; 0 = the widest the CPU runs
     float iterScaleMin = 0.0f, iterScaleMax = 64.0f;    ///< iterations heatmap scale
     float fetchScaleMin = 0.0f, fetchScaleMax = 64.0f;  ///< fetches heatmap scale
     /// Also compute the exact reference of every covered pixel and the metrics against it
@@ -74,6 +80,15 @@ Mesh MakePlane(float tiling);
 
 /// The unit direction towards the light (settings.lightDir normalised in float).
 glm::vec3 SceneLight(const RenderSettings& settings);
+
+/// uv per plane unit times the depth scale: what one unit of depth is in uv along a
+/// tangent direction (the view ray's dirUv scale; the shading's slope scale). The orbit
+/// camera's plane repeats the texture `tiling` times; the ortho view frames one tile.
+float SceneSlopeScale(const RenderSettings& settings);
+
+/// The light-ray kernel of the settings (kernels/shadow.h): kind, parameters and the uv
+/// step per unit of rise towards SceneLight.
+ShadowJob SceneShadow(const RenderSettings& settings);
 
 /// The settings' method with its --set parameters resolved (defaults filled in): the one
 /// place render, trace and glcompare configure their kernel.

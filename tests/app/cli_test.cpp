@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 
 #include "tests/app/cli_util.h"
 #include "texture/image_io.h"
@@ -379,4 +380,40 @@ TEST(Cli, LightAnglesAreTheLightDirection) {
     EXPECT_NE(read(d / "a" / "color.png"), read(d / "c" / "color.png"));
     EXPECT_NE(read(d / "b" / "metrics.json").find("\"light_dir\""), std::string::npos)
         << read(d / "b" / "metrics.json");
+}
+
+TEST(Cli, BadShadowsAreOneError) {
+    const std::string r = "render --map builtin:shapes:32 --method relief ";
+    ExpectCleanFailure(r + "--shadow penumbra", "--shadow");
+    ExpectCleanFailure(r + "--shadow hard --shadow-steps 0", "--shadow-steps");
+    ExpectCleanFailure(r + "--shadow hard --shadow-steps 5000", "--shadow-steps");
+    ExpectCleanFailure(r + "--shadow hard --shadow-steps x", "--shadow-steps");
+    ExpectCleanFailure(r + "--shadow soft --shadow-softening -1", "--shadow-softening");
+    ExpectCleanFailure(r + "--shadow soft --shadow-softening nan", "--shadow-softening");
+    ExpectCleanFailure(r + "--shadow soft --shadow-softening inf", "--shadow-softening");
+}
+
+TEST(Cli, ShadowsWriteTheirFetchesApart) {
+    fs::path d = Scratch();
+    const std::string r = "render --map builtin:shapes:64 --size 64x48 ";
+    Result hard =
+        RunCli(r + "--shadow hard --shadow-steps 12 --out " + (d / "h").string(), d);
+    ASSERT_EQ(hard.exitCode, 0) << hard.err;
+    EXPECT_NE(hard.out.find("shadow_fetches.png"), std::string::npos) << hard.out;
+    EXPECT_TRUE(fs::exists(d / "h" / "shadow_fetches.png"));
+    std::ifstream in(d / "h" / "metrics.json");
+    const nlohmann::json j = nlohmann::json::parse(in);
+    EXPECT_EQ(j["shadow"], "hard");
+    EXPECT_EQ(j["shadow_steps"], 12);
+    EXPECT_GT(j["avg_shadow_fetches"].get<double>(), 1.0);
+    EXPECT_LE(j["max_shadow_fetches"].get<int>(), 12);
+    EXPECT_LT(j["avg_light_visibility"].get<double>(), 1.0);  // shapes casts shadows
+    // Without --shadow: no light ray, no file, and the key says 0.
+    Result none = RunCli(r + "--out " + (d / "n").string(), d);
+    ASSERT_EQ(none.exitCode, 0) << none.err;
+    EXPECT_FALSE(fs::exists(d / "n" / "shadow_fetches.png"));
+    std::ifstream in2(d / "n" / "metrics.json");
+    const nlohmann::json k = nlohmann::json::parse(in2);
+    EXPECT_EQ(k["shadow"], "none");
+    EXPECT_EQ(k["avg_shadow_fetches"].get<double>(), 0.0);
 }

@@ -247,3 +247,41 @@ TEST(Render, GroupHeatmapsAreTheExecutedLaneCostAndNest) {
     }
     EXPECT_GT(covered, 1000u);
 }
+
+// Shadows only darken: where the light is visible the colour is the unshadowed frame's,
+// bit for bit; where it is blocked only the ambient term is left; the view ray's record
+// is untouched, and its lane costs do not include the light rays.
+TEST(Render, ShadowsDarkenOnlyWhereTheLightIsBlocked) {
+    DepthField f = MakeBuiltinMap("builtin:shapes:64");
+    RenderSettings s = Small("relief");
+    s.width = 96, s.height = 80;
+    const RenderOutput plain = Render(f, s);
+    EXPECT_TRUE(plain.shadowFetches.empty());
+    s.shadow = ShadowKind::Hard;
+    const RenderOutput hard = Render(f, s);
+    EXPECT_EQ(hard.record.nFetches, plain.record.nFetches);
+    EXPECT_EQ(hard.laneCost.warp32, plain.laneCost.warp32);
+    size_t blocked = 0, lit = 0;
+    for (size_t i = 0; i < hard.visibility.size(); ++i) {
+        if (!hard.record.Covered(i) || (hard.record.flags[i] & kFlagNoHit)) continue;
+        for (size_t c = 0; c < 3; ++c) {
+            if (hard.visibility[i] == 1.0f)
+                EXPECT_EQ(hard.color[3 * i + c], plain.color[3 * i + c]) << i;
+            else
+                EXPECT_LE(hard.color[3 * i + c], plain.color[3 * i + c]) << i;
+        }
+        (hard.visibility[i] == 0.0f ? blocked : lit) += 1;
+        EXPECT_GE(hard.shadowFetches[i], 1u);
+        EXPECT_LE(hard.shadowFetches[i], uint32_t(s.shadowSteps));
+    }
+    EXPECT_GT(blocked, 100u);
+    EXPECT_GT(lit, 1000u);
+    // A light straight overhead casts no shadow on a height field.
+    s.lightDir = {0.0f, 0.0f, 1.0f};
+    const RenderOutput overhead = Render(f, s);
+    for (size_t i = 0; i < overhead.visibility.size(); ++i) {
+        if (overhead.record.Covered(i)) {
+            EXPECT_EQ(overhead.visibility[i], 1.0f) << i;
+        }
+    }
+}

@@ -313,6 +313,44 @@ TEST(GlCompare, LeastConeStepsAreBitIdentical) {
     EXPECT_GE(compared, 8 * 2 * 2 * 2);
 }
 
+// The light-ray kernels' twin (shadow.glsl): hard and soft shadows over a linear, a
+// cone and a directional kernel, float and 8-bit, orbit and ortho views: the light rays'
+// fetches and visibility bit-identical, and the view rays' record untouched.
+TEST(GlCompare, ShadowsAreBitIdentical) {
+    int compared = 0;
+    for (const char* method : {"relief", "csm", "acm4", "pom"})
+        for (ShadowKind kind : {ShadowKind::Hard, ShadowKind::Soft})
+            for (TextureFormat format : {TextureFormat::R32F, TextureFormat::R8})
+                for (CameraKind camera : {CameraKind::Orbit, CameraKind::Ortho}) {
+                    SCOPED_TRACE(std::string(method) + " " +
+                                 std::string(kShadowNames.Name(kind)) + " " +
+                                 std::string(ToString(format)));
+                    RenderSettings s;
+                    s.method = method;
+                    s.shadow = kind;
+                    s.shadowSteps = 13;
+                    s.camera = camera;
+                    s.viewDir = {0.4f, -0.3f, -0.8f};
+                    s.lightDir = {0.5f, 0.6f, 0.6f};
+                    s.sampler.precision = format == TextureFormat::R8
+                                              ? Precision::Llvmpipe8
+                                              : Precision::Float;
+                    s.width = s.height = 72;
+                    const GlCompareResult r =
+                        RunGlCompare(LoadField("builtin:shapes", format), s, Gl());
+                    ExpectIdentical(r);
+                    ASSERT_TRUE(r.shadow.on);
+                    EXPECT_GT(r.shadow.pixels, 0u);
+                    EXPECT_EQ(r.shadow.fetchesIdentical, r.shadow.pixels);
+                    EXPECT_EQ(r.shadow.visibilityIdentical, r.shadow.pixels);
+                    size_t shadowed = 0;
+                    for (float v : r.gl.visibility) shadowed += v < 1.0f;
+                    EXPECT_GT(shadowed, 20u);  // the light is low enough to cast shadows
+                    ++compared;
+                }
+    EXPECT_EQ(compared, 4 * 2 * 2 * 2);
+}
+
 // The orthographic texture-space view: every kernel, float and 8-bit, a slanted and a
 // steep direction, a non-square size.
 TEST(GlCompare, OrthoCameraIsBitIdentical) {

@@ -117,6 +117,43 @@ TEST(LaneWidth, EveryWidthRendersTheSameFrame) {
     }
 }
 
+// The light-ray kernels (--shadow) run on the lanes of the view kernel's pack: every
+// width and thread count gives the same light rays, visibility and shading.
+TEST(LaneWidth, EveryWidthCastsTheSameShadows) {
+    const DepthField shapes = MakeBuiltinMap("shapes", 64, 64);
+    for (ShadowKind kind : {ShadowKind::Hard, ShadowKind::Soft})
+        for (const char* method : {"relief", "csm", "pom"}) {
+            RenderSettings s;
+            s.method = method;
+            s.width = 77, s.height = 53;
+            s.viewAngle = 50.0f;
+            s.shadow = kind;
+            s.shadowSteps = 11;
+            s.threads = 1, s.lanes = 1;
+            const RenderOutput reference = Render(shapes, s);
+            ASSERT_EQ(reference.shadowFetches.size(), size_t(77 * 53));
+            for (const LaneWidthInfo& w : LaneWidths()) {
+                if (!w.supported) continue;
+                for (int threads : {1, 2}) {
+                    s.lanes = w.width, s.threads = threads;
+                    const RenderOutput r = Render(shapes, s);
+                    const std::string what = std::string(method) + " lanes " +
+                                             std::to_string(w.width) + " threads " +
+                                             std::to_string(threads);
+                    ExpectSameFrame(reference, r, what);
+                    EXPECT_EQ(r.shadowFetches, reference.shadowFetches) << what;
+                    EXPECT_EQ(
+                        0, std::memcmp(r.visibility.data(), reference.visibility.data(),
+                                       r.visibility.size() * sizeof(float)))
+                        << what;
+                    EXPECT_EQ(0, std::memcmp(r.color.data(), reference.color.data(),
+                                             r.color.size() * sizeof(float)))
+                        << what;
+                }
+            }
+        }
+}
+
 TEST(LaneWidth, ExecutedLaneCostMatchesTheGroupOracle) {
     const DepthField field = MakeBuiltinMap("shapes", 128, 128);
     for (float angle : {0.0f, 40.0f, 70.0f}) {

@@ -1,0 +1,77 @@
+// Light-ray kernels: the self-shadowing of a hit (render --shadow none|hard|soft),
+// written once over a lane type like the view kernels; kernels/glsl/shadow.glsl is the
+// same code. docs/methods/shadows.md has the equations and what each counts.
+//
+// Both trace the light ray from the shaded point towards the light, in texture space:
+// rising r depth units moves uv by r * (lu, lv) with (lu, lv) = L.xy / L.z * k (L the
+// unit tangent-space direction towards the light, k the uv per plane unit times the
+// depth scale, as the view ray's dirUv), and the ray starts on the surface at the hit's
+// uv, h0 = h(uv0) (a fetch: the hit a coarse search returns can lie a step inside the
+// relief, and the surface height at its uv does not, so a flat or slanted plane never
+// shadows itself).
+//  * hard (dissertation 004 §2.6 and §4.4: the coarse search of occlusion reused for the
+//    light ray; McGuire's steep parallax shadows): the ray from h0 to the top in
+//    shadow_steps equal steps; sample i = 1 .. steps-1 at depth t = h0 - i * h0 / steps
+//    (the top itself cannot be occluded). Occluded, visibility 0, at the first sample
+//    whose surface lies above the ray (h < t); the loop leaves there, as a GPU shader's
+//    break. Fetches: 1 + the samples taken.
+//  * soft (Tatarchuk 2006, "Dynamic parallax occlusion mapping with approximate soft
+//    shadows", as in the DirectX SDK's ParallaxOcclusionMapping sample): seven samples at
+//    the fractions f = 0.88, 0.77, ..., 0.22 of a light vector that rises one full depth,
+//    each weighted (1, 2, 4, 6, 8, 10, 12: nearer samples count more) by how far the
+//    surface lies above the ray there, times shadow_softening; visibility = 1 - the
+//    largest, clamped to [0, 1]. Fetches: always 8. The sample keeps the ray's geometry
+//    (L.xy / L.z); the SDK's shader steps L.xy alone, which only matches for a light
+//    overhead.
+// Lanes with no hit get visibility 1 and no fetch.
+#pragma once
+
+#include "kernels/lanes.h"
+#include "kernels/shadow_job.h"
+#include "texture/lane_sampler.h"
+
+namespace reliefsim {
+
+/// The light's visibility in [0, 1] at each lane's hit (u0, v0) where `hit`, counting
+/// each lane's light-ray fetches into `fetches`. 1 elsewhere.
+template <class L>
+RS_INLINE typename L::F LightVisibility(const LaneTextures& tex, const ShadowJob& s,
+                                        const typename L::F& u0, const typename L::F& v0,
+                                        const typename L::M& hit,
+                                        typename L::F& fetches) {
+    using F = typename L::F;
+    using M = typename L::M;
+    F vis(1.0f);
+    if (s.kind == ShadowKind::None || !Any(hit)) return vis;
+    F texels(0.0f);  // the view ray's texel count is not the light's
+    const F h0 = SampleHeightLanes<L>(tex, u0, v0, hit, texels);
+    Assign(hit, fetches, fetches + F(1.0f));
+    if (s.kind == ShadowKind::Hard) {
+        const F step = h0 * F(s.stepInv);
+        M on = hit;
+        for (int i = 1; i < s.steps && Any(on); ++i) {
+            const F rise = F(float(i)) * step;
+            const F t = h0 - rise;
+            const F u = u0 + rise * F(s.lu), v = v0 + rise * F(s.lv);
+            const F h = SampleHeightLanes<L>(tex, u, v, on, texels);
+            Assign(on, fetches, fetches + F(1.0f));
+            const M blocked = on && (h < t);
+            Assign(blocked, vis, F(0.0f));
+            on = on && !blocked;
+        }
+        return vis;
+    }
+    F occlusion(0.0f);
+    for (size_t k = 0; k < kSoftShadowFraction.size(); ++k) {
+        const F f(kSoftShadowFraction[k]);
+        const F t = h0 - f;
+        const F u = u0 + f * F(s.lu), v = v0 + f * F(s.lv);
+        const F h = SampleHeightLanes<L>(tex, u, v, hit, texels);
+        occlusion = MaxSse(occlusion, (t - h) * F(kSoftShadowWeight[k] * s.softening));
+    }
+    Assign(hit, fetches, fetches + F(float(kSoftShadowFraction.size())));
+    Assign(hit, vis, MaxSse(F(1.0f) - occlusion, F(0.0f)));
+    return vis;
+}
+
+}  // namespace reliefsim

@@ -1,0 +1,215 @@
+// The light-ray kernels (kernels/shadow.h, `render --shadow`): closed forms on a flat
+// plane and behind a wall, a scalar-sampler oracle on real relief, and one result at
+// every lane width.
+#include "kernels/shadow.h"
+
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cmath>
+#include <vector>
+
+#include "kernels/registry.h"
+#include "render/batch.h"
+#include "render/kernel_maps.h"
+#include "texture/procedural.h"
+#include "texture/sampler.h"
+
+using namespace reliefsim;
+
+namespace {
+
+struct Lit {
+    std::vector<float> visibility;
+    std::vector<uint32_t> fetches;
+};
+
+/// Vertical view rays (dirUv 0, so each hit lies at its entry uv) through `method` with
+/// the light-ray kernel `shadow`, at every lane width this CPU runs; the widths must
+/// agree bit for bit. Returns the single-lane results.
+Lit LightRays(const DepthField& f, const ShadowJob& shadow,
+              const std::vector<glm::vec2>& uv, const char* method = "relief") {
+    const KernelInfo& info = FindMethod(method);
+    const Kernel kernel = MakeKernel(info, ResolveParams(info, {}));
+    KernelMapSettings maps;
+    maps.useCache = false;
+    std::shared_ptr<const void> params;
+    BatchJob job = MakeBatchJob(kernel, BindKernelTextures(f, {}, kernel, maps), params);
+    job.shadow = shadow;
+    const size_t n = uv.size();
+    std::vector<float> ue(n), ve(n), zero(n, 0.0f);
+    for (size_t i = 0; i < n; ++i) ue[i] = uv[i].x, ve[i] = uv[i].y;
+    Lit first;
+    bool haveFirst = false;
+    for (const LaneWidthInfo& w : LaneWidths()) {
+        if (!w.supported) continue;
+        std::vector<float> u(n), v(n), depth(n), vis(n, -1.0f);
+        std::vector<uint16_t> coarse(n), refine(n);
+        std::vector<uint32_t> fetches(n), texels(n), shadowFetches(n, 999u);
+        std::vector<uint8_t> flags(n);
+        LaneBatch b;
+        b.n = int(n);
+        b.uEntry = ue.data(), b.vEntry = ve.data(), b.du = zero.data(),
+        b.dv = zero.data();
+        b.u = u.data(), b.v = v.data(), b.depth = depth.data();
+        b.nCoarse = coarse.data(), b.nRefine = refine.data();
+        b.fetches = fetches.data(), b.texelReads = texels.data(), b.flags = flags.data();
+        b.shadowFetches = shadowFetches.data(), b.visibility = vis.data();
+        w.fn(job, b);
+        if (!haveFirst) {
+            first = {vis, shadowFetches};
+            haveFirst = true;
+            continue;
+        }
+        for (size_t i = 0; i < n; ++i) {
+            EXPECT_EQ(std::bit_cast<uint32_t>(vis[i]),
+                      std::bit_cast<uint32_t>(first.visibility[i]))
+                << "width " << w.width << " ray " << i;
+            EXPECT_EQ(shadowFetches[i], first.fetches[i]) << "width " << w.width;
+        }
+    }
+    return first;
+}
+
+ShadowJob Job(ShadowKind kind, float lu, float lv, int steps = 16,
+              float softening = 0.58f) {
+    ShadowJob s;
+    s.kind = kind;
+    s.steps = steps;
+    s.stepInv = 1.0f / float(steps);
+    s.softening = softening;
+    s.lu = lu, s.lv = lv;
+    return s;
+}
+
+/// Depth 0.75 (the floor) except the wall: columns 40..43 of 64 at depth 0 (the top).
+DepthField Wall() {
+    DepthField f = MakeBuiltinMap("flat", 64, 64);
+    f.name = "wall";
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x)
+            f.depth[size_t(y) * 64 + size_t(x)] = x >= 40 && x < 44 ? 0.0f : 0.75f;
+    return f;
+}
+
+const glm::vec2 kFloor{32.5f / 64.0f, 32.5f / 64.0f};  // a texel centre of the floor
+
+/// The light ray of kernels/shadow.h with the scalar sampler (texture/sampler.h), an
+/// implementation apart from the lanes' sampler: (visibility, fetches).
+std::pair<float, uint32_t> Oracle(const DepthField& f, const ShadowJob& s,
+                                  glm::vec2 uv0) {
+    Sampler<false> smp(f, SamplerState{});
+    const float h0 = smp.Sample(uv0);
+    uint32_t n = 1;
+    if (s.kind == ShadowKind::Hard) {
+        const float step = h0 * s.stepInv;
+        for (int i = 1; i < s.steps; ++i) {
+            const float rise = float(i) * step, t = h0 - rise;
+            ++n;
+            if (smp.Sample({uv0.x + rise * s.lu, uv0.y + rise * s.lv}) < t)
+                return {0.0f, n};
+        }
+        return {1.0f, n};
+    }
+    float occlusion = 0.0f;
+    for (size_t k = 0; k < kSoftShadowFraction.size(); ++k) {
+        const float fr = kSoftShadowFraction[k], t = h0 - fr;
+        const float h = smp.Sample({uv0.x + fr * s.lu, uv0.y + fr * s.lv});
+        occlusion = MaxSse(occlusion, (t - h) * (kSoftShadowWeight[k] * s.softening));
+    }
+    return {MaxSse(1.0f - occlusion, 0.0f), 8u};
+}
+
+}  // namespace
+
+TEST(Shadow, AFlatPlaneNeverShadowsItself) {
+    const DepthField flat = MakeBuiltinMap("flat", 32, 32);
+    const std::vector<glm::vec2> uv = {{0.3f, 0.7f}, {0.51f, 0.02f}, {0.9f, 0.9f}};
+    for (const ShadowJob& s :
+         {Job(ShadowKind::Hard, 0.3f, -0.2f), Job(ShadowKind::Hard, -2.0f, 5.0f, 7),
+          Job(ShadowKind::Soft, 0.3f, -0.2f),
+          Job(ShadowKind::Soft, 4.0f, 1.0f, 16, 50.0f)}) {
+        const Lit r = LightRays(flat, s, uv);
+        for (size_t i = 0; i < uv.size(); ++i) {
+            EXPECT_EQ(r.visibility[i], 1.0f);
+            // hard: the start and steps-1 samples; soft: the start and Tatarchuk's seven
+            EXPECT_EQ(r.fetches[i], s.kind == ShadowKind::Hard ? uint32_t(s.steps) : 8u);
+        }
+    }
+}
+
+TEST(Shadow, HardShadowStopsAtTheWall) {
+    // From the floor (h0 = 0.75) towards +u at a quarter uv per unit of rise: sample i
+    // rises 0.75 i / 16 to depth 0.75 (1 - i/16) at u * 64 = 32.5 + 0.75 i (all exact in
+    // binary). i = 10 (u * 64 = 40, on the wall's ramp) passes: the surface, at depth
+    // 0.375, lies below the ray at 0.28125; i = 11 (40.75, surface depth 0 < 0.234375) is
+    // blocked: occluded after 1 + 11 fetches.
+    const DepthField wall = Wall();
+    Lit r = LightRays(wall, Job(ShadowKind::Hard, 0.25f, 0.0f), {kFloor});
+    EXPECT_EQ(r.visibility[0], 0.0f);
+    EXPECT_EQ(r.fetches[0], 12u);
+    // Away from the wall (-u: u * 64 falls to 21.25) and short of it (u * 64 <= 34.75):
+    // lit, after all 16 fetches.
+    for (float lu : {-0.25f, 0.05f}) {
+        r = LightRays(wall, Job(ShadowKind::Hard, lu, 0.0f), {kFloor});
+        EXPECT_EQ(r.visibility[0], 1.0f) << lu;
+        EXPECT_EQ(r.fetches[0], 16u) << lu;
+    }
+    // On top of the wall: h0 = 0, nothing can lie above the light ray.
+    r = LightRays(wall, Job(ShadowKind::Hard, 0.25f, 0.0f), {{41.5f / 64.0f, 0.5f}});
+    EXPECT_EQ(r.visibility[0], 1.0f);
+}
+
+TEST(Shadow, SoftShadowIsTatarchuksLargestWeightedPenetration) {
+    // The samples at f = 0.66 and 0.55 land on the wall (u * 64 = 32.5 + 16 f = 43.06 and
+    // 41.3, depth 0) with the ray at depth 0.75 - f: penetrations 0.09 and 0.2, weights 4
+    // and 6; at the others the floor or the ramp lies below the ray (h > 0.75 - f), which
+    // adds nothing. Softening 0.1: the light keeps 1 - 0.2 * 6 * 0.1 = 0.88; the SDK's
+    // 0.58 keeps 1 - 0.696; softening 1 puts the point in full shadow.
+    const DepthField wall = Wall();
+    Lit r = LightRays(wall, Job(ShadowKind::Soft, 0.25f, 0.0f, 16, 0.1f), {kFloor});
+    EXPECT_NEAR(r.visibility[0], 1.0 - 0.2 * 6 * 0.1, 1e-5);
+    EXPECT_EQ(r.fetches[0], 8u);
+    r = LightRays(wall, Job(ShadowKind::Soft, 0.25f, 0.0f), {kFloor});
+    EXPECT_NEAR(r.visibility[0], 1.0 - 0.2 * 6 * 0.58, 1e-5);
+    r = LightRays(wall, Job(ShadowKind::Soft, 0.25f, 0.0f, 16, 1.0f), {kFloor});
+    EXPECT_EQ(r.visibility[0], 0.0f);
+    // Softening 0 sees no occluder at all.
+    r = LightRays(wall, Job(ShadowKind::Soft, 0.25f, 0.0f, 16, 0.0f), {kFloor});
+    EXPECT_EQ(r.visibility[0], 1.0f);
+}
+
+TEST(Shadow, EqualsTheScalarOracleOnRealRelief) {
+    // 400 rays over the noise and shapes built-ins, both kernels, several lights.
+    for (const char* map : {"noise", "shapes"}) {
+        const DepthField f = MakeBuiltinMap(map, 96, 64);
+        std::vector<glm::vec2> uv;
+        for (int k = 0; k < 200; ++k)
+            uv.push_back({float((k * 37) % 200) / 200.0f + 0.0013f,
+                          float((k * 91) % 200) / 200.0f});
+        int shadowed = 0, lit = 0;
+        for (const ShadowJob& s :
+             {Job(ShadowKind::Hard, 0.6f, -0.3f, 24),
+              Job(ShadowKind::Hard, -0.1f, 0.35f, 5), Job(ShadowKind::Soft, 0.6f, -0.3f),
+              Job(ShadowKind::Soft, -0.1f, 0.35f, 16, 2.0f)}) {
+            const Lit r = LightRays(f, s, uv);
+            for (size_t i = 0; i < uv.size(); ++i) {
+                const auto [vis, fetches] = Oracle(f, s, uv[i]);
+                EXPECT_EQ(std::bit_cast<uint32_t>(r.visibility[i]),
+                          std::bit_cast<uint32_t>(vis))
+                    << map << " ray " << i;
+                EXPECT_EQ(r.fetches[i], fetches) << map << " ray " << i;
+                (r.visibility[i] < 1.0f ? shadowed : lit) += 1;
+            }
+        }
+        EXPECT_GT(shadowed, 50) << map;  // the case is not trivially lit
+        EXPECT_GT(lit, 50) << map;
+    }
+}
+
+TEST(Shadow, NoShadowsCostNothing) {
+    const DepthField wall = Wall();
+    const Lit r = LightRays(wall, ShadowJob{}, {kFloor});
+    EXPECT_EQ(r.visibility[0], 1.0f);
+    EXPECT_EQ(r.fetches[0], 0u);
+}
