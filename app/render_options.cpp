@@ -121,16 +121,23 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
                     "when --light-angle is given)");
     AddEnumOption(cmd, "--shadow", o.settings.shadow, kShadowNames,
                   "self-shadowing of every hit by a light ray (docs/methods/shadows.md): "
-                  "none, hard (linear search towards the light, --shadow-steps) or soft "
+                  "none, hard (linear search towards the light, --shadow-steps), cone "
+                  "(with --method cns: the cone-normal soft shadow, --shadow-steps, "
+                  "--shadow-penumbra) or soft "
                   "(Tatarchuk's seven weighted samples, --shadow-softening)");
     cmd->add_option("--shadow-steps", o.settings.shadowSteps,
-                    "hard shadows: steps of the light ray from the surface to the top")
+                    "hard and cone shadows: steps of the light ray from the surface to "
+                    "the top")
         ->capture_default_str()
         ->check(CLI::Range(1, kMaxShadowSteps));
     cmd->add_option("--shadow-softening", o.settings.shadowSoftening,
                     "soft shadows: Tatarchuk's softening (the DirectX SDK sample's 0.58)")
         ->capture_default_str()
         ->check(CLI::Range(0.0f, kMaxShadowSoftening));
+    cmd->add_option("--shadow-penumbra", o.settings.shadowPenumbra,
+                    "cone shadows: the distance-field penumbra factor k (larger: harder)")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0f, kMaxShadowPenumbra));
     AddEnumOption(cmd, "--filter", o.settings.sampler.filter, kFilterNames,
                   "height sampler filter");
     AddEnumOption(cmd, "--wrap", o.settings.sampler.wrap, kWrapModeNames,

@@ -35,11 +35,11 @@ constexpr size_t kMaxConfigurations = 1000000;
 /// The render keys a view, or the top level, may set.
 const std::vector<std::string>& RenderKeys() {
     static const std::vector<std::string> kKeys = {
-        "view_angle",      "azimuth",   "distance", "fov",
-        "depth_scale",     "tiling",    "filter",   "wrap",
-        "texture_format",  "threads",   "lanes",    "camera",
-        "view_dir",        "light_dir", "shadow",   "shadow_steps",
-        "shadow_softening"};
+        "view_angle",       "azimuth",        "distance", "fov",
+        "depth_scale",      "tiling",         "filter",   "wrap",
+        "texture_format",   "threads",        "lanes",    "camera",
+        "view_dir",         "light_dir",      "shadow",   "shadow_steps",
+        "shadow_softening", "shadow_penumbra"};
     return kKeys;
 }
 
@@ -110,6 +110,8 @@ void ApplyRenderKey(RenderSettings& s, const std::string& key, const ojson& v,
         s.shadowSteps = int(n);
     } else if (key == "shadow_softening") {
         s.shadowSoftening = float(Number(v, at));
+    } else if (key == "shadow_penumbra") {
+        s.shadowPenumbra = float(Number(v, at));
     } else if (key == "view_dir") {
         if (!v.is_array() || v.size() != 3)
             Bad(at, "expected [X, Y, Z], got " + v.dump());

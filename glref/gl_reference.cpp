@@ -494,6 +494,8 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     glUniform1f(loc("uShadowStepInv"), sh.stepInv);
     glUniform1f(loc("uShadowSoftening"), sh.softening);
     glUniform2f(loc("uLightStep"), sh.lu, sh.lv);
+    glUniform1f(loc("uShadowPenumbra"), sh.penumbra);
+    glUniform1f(loc("uShadowRayLength"), sh.rayLength);
     m.shadows = sh.kind != ShadowKind::None;
 
     m.lanesTemplate = LaneMeasurement{};

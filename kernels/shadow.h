@@ -1,4 +1,4 @@
-// Light-ray kernels: the self-shadowing of a hit (render --shadow none|hard|soft),
+// Light-ray kernels: the self-shadowing of a hit (render --shadow none|hard|soft|cone),
 // written once over a lane type like the view kernels; kernels/glsl/shadow.glsl is the
 // same code. docs/methods/shadows.md has the equations and what each counts.
 //
@@ -23,6 +23,13 @@
 //    largest, clamped to [0, 1]. Fetches: always 8. The sample keeps the ray's geometry
 //    (L.xy / L.z); the SDK's shader steps L.xy alone, which only matches for a light
 //    overhead.
+//  * cone (dissertation 004 §4.4, cone-normal soft shadows; cns's map): the hard
+//    shadow's samples, each also reading the cone normal's n_z there. The ray lies
+//    a = h - t above the surface (a < 0: blocked, visibility 0, the loop leaves); the
+//    cone's distance estimate is d = a n_z (eq. 3.1), and the penumbra that of a
+//    distance field (Quilez 2010): visibility = min(1, min_i k d_i / s_i), s_i = rise_i
+//    |(lu, lv, 1)| the distance travelled in the map's (uv, depth) space, k =
+//    shadow_penumbra. Fetches: as hard (each reads depth and n_z in one footprint).
 // Lanes with no hit get visibility 1 and no fetch.
 #pragma once
 
@@ -46,6 +53,27 @@ RS_INLINE typename L::F LightVisibility(const LaneTextures& tex, const ShadowJob
     F texels(0.0f);  // the view ray's texel count is not the light's
     const F h0 = SampleHeightLanes<L>(tex, u0, v0, hit, texels);
     Assign(hit, fetches, fetches + F(1.0f));
+    if (s.kind == ShadowKind::Cone) {
+        using I = typename L::I;
+        const F step = h0 * F(s.stepInv);
+        M on = hit;
+        for (int i = 1; i < s.steps && Any(on); ++i) {
+            const F rise = F(float(i)) * step;
+            const F t = h0 - rise;
+            const F u = u0 + rise * F(s.lu), v = v0 + rise * F(s.lv);
+            F nz(0.0f);
+            const F h = SampleHeightConeLanes<L>(tex, u, v, I(0), on, texels, nz);
+            Assign(on, fetches, fetches + F(1.0f));
+            const F above = h - t;
+            const M blocked = on && (above < F(0.0f));
+            Assign(blocked, vis, F(0.0f));
+            on = on && !blocked;
+            // (A hit at the top, h0 = 0, rises by 0: no estimate, nothing above it.)
+            const F estimate = (F(s.penumbra) * (above * nz)) / (rise * F(s.rayLength));
+            Assign(on && (rise > F(0.0f)), vis, MinSse(vis, estimate));
+        }
+        return vis;
+    }
     if (s.kind == ShadowKind::Hard) {
         const F step = h0 * F(s.stepInv);
         M on = hit;

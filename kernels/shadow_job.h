@@ -9,16 +9,18 @@
 namespace reliefsim {
 
 /// The light-ray kernels, in the order of the twin's uShadow values.
-enum class ShadowKind { None, Hard, Soft };
+enum class ShadowKind { None, Hard, Soft, Cone };
 
 inline constexpr auto kShadowNames = MakeEnumNames<ShadowKind>({
     {"none", ShadowKind::None},
     {"hard", ShadowKind::Hard},
     {"soft", ShadowKind::Soft},
+    {"cone", ShadowKind::Cone},
 });
 
 inline constexpr int kMaxShadowSteps = 1024;
 inline constexpr float kMaxShadowSoftening = 1000.0f;
+inline constexpr float kMaxShadowPenumbra = 1000.0f;
 
 /// What the light ray of every lane needs (in float, as the twin's uniforms).
 struct ShadowJob {
@@ -26,6 +28,8 @@ struct ShadowJob {
     int steps = 16;              ///< hard: steps from the surface to the top
     float stepInv = 1.0f / 16;   ///< 1.0f / steps, computed once (uShadowStepInv)
     float softening = 0.58f;     ///< soft: Tatarchuk's shadow softening (the SDK's 0.58)
+    float penumbra = 8.0f;       ///< cone: the distance-field penumbra factor k (Quilez)
+    float rayLength = 1.0f;      ///< cone: |(lu, lv, 1)|, the ray's length per unit rise
     float lu = 0.0f, lv = 0.0f;  ///< uv per unit of rise along the light ray
 };
 

@@ -57,6 +57,10 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
     if (s.shadow == ShadowKind::Hard) j["shadow_steps"] = s.shadowSteps;
     if (s.shadow == ShadowKind::Soft)
         j["shadow_softening"] = ShortestDouble(s.shadowSoftening);
+    if (s.shadow == ShadowKind::Cone) {
+        j["shadow_steps"] = s.shadowSteps;
+        j["shadow_penumbra"] = ShortestDouble(s.shadowPenumbra);
+    }
     j["view_angle"] = ShortestDouble(s.viewAngle);
     j["azimuth"] = ShortestDouble(s.azimuth);
     j["distance"] = ShortestDouble(s.distance);

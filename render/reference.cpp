@@ -35,7 +35,11 @@ ReferenceRecord RenderReference(const DepthField& field, const RenderSettings& s
     SamplerState shading = s.sampler;
     shading.filter = Filter::Bilinear;
     BatchJob job;
-    job.textures = BindTextures(field, shading);
+    // The cone-normal soft shadow reads the kernel's cone-normal map: bind it as the
+    // frame did (through the cache), with the shading's filter for the depth.
+    job.textures = s.shadow == ShadowKind::Cone
+                       ? BindKernelTextures(field, shading, SettingsKernel(s), s.maps)
+                       : BindTextures(field, shading);
     job.params = &surface;
     job.view = &view;
     job.slopeScale = SceneSlopeScale(s);

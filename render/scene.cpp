@@ -50,6 +50,20 @@ void ValidateSettings(const RenderSettings& s) {
     if (!(s.shadowSoftening >= 0.0f && s.shadowSoftening <= kMaxShadowSoftening))
         bad("--shadow-softening " + num(s.shadowSoftening) + ": must be in [0, " +
             num(kMaxShadowSoftening) + "]");
+    if (!(s.shadowPenumbra >= 0.0f && s.shadowPenumbra <= kMaxShadowPenumbra))
+        bad("--shadow-penumbra " + num(s.shadowPenumbra) + ": must be in [0, " +
+            num(kMaxShadowPenumbra) + "]");
+    if (s.shadow == ShadowKind::Cone) {
+        // The cone-normal soft shadow reads the cone normal of cns's map (004 §4.4).
+        const auto maps = FindMethod(s.method).maps;
+        if (maps.size() != 1 || maps[0] != "cone-normal")
+            bad("--shadow cone: reads the cone-normal map of method cns (dissertation "
+                "§4.4); --method " +
+                s.method + " binds " +
+                (maps.empty() ? std::string("no derived map")
+                              : "the \"" + std::string(maps[0]) + "\" map") +
+                "; use --method cns, or --shadow hard|soft");
+    }
     if (s.camera == CameraKind::Ortho) {
         const glm::vec3 d = s.viewDir;
         const std::string text = num(d.x) + "," + num(d.y) + "," + num(d.z);
@@ -132,10 +146,12 @@ ShadowJob SceneShadow(const RenderSettings& s) {
     j.steps = s.shadowSteps;
     j.stepInv = 1.0f / float(s.shadowSteps);
     j.softening = s.shadowSoftening;
+    j.penumbra = s.shadowPenumbra;
     const glm::vec3 l = SceneLight(s);
     const float k = SceneSlopeScale(s);
     j.lu = (l.x / l.z) * k;
     j.lv = (l.y / l.z) * k;
+    j.rayLength = std::sqrt((j.lu * j.lu + j.lv * j.lv) + 1.0f);
     return j;
 }
 

@@ -57,6 +57,7 @@ struct RenderSettings {
     ShadowKind shadow = ShadowKind::None;
     int shadowSteps = 16;  ///< hard: steps from the surface to the top, [1, 1024]
     float shadowSoftening = 0.58f;  ///< soft: Tatarchuk's softening, [0, 1000]
+    float shadowPenumbra = 8.0f;    ///< cone: the penumbra factor k, [0, 1000]
     SamplerState sampler;           ///< height-map filter and wrap
     KernelMapSettings maps;         ///< the kernel's derived maps (cone kernels)
     int threads = 0;                ///< worker threads; 0 = all cores

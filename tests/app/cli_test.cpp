@@ -391,6 +391,10 @@ TEST(Cli, BadShadowsAreOneError) {
     ExpectCleanFailure(r + "--shadow soft --shadow-softening -1", "--shadow-softening");
     ExpectCleanFailure(r + "--shadow soft --shadow-softening nan", "--shadow-softening");
     ExpectCleanFailure(r + "--shadow soft --shadow-softening inf", "--shadow-softening");
+    ExpectCleanFailure(r + "--shadow cone", "--shadow cone");  // relief has no cone map
+    ExpectCleanFailure("render --map builtin:shapes:32 --method csm --shadow cone",
+                       "--shadow cone");  // csm's cones are ratios, not normals
+    ExpectCleanFailure(r + "--shadow hard --shadow-penumbra -2", "--shadow-penumbra");
 }
 
 TEST(Cli, ShadowsWriteTheirFetchesApart) {

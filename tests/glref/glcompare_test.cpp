@@ -348,7 +348,31 @@ TEST(GlCompare, ShadowsAreBitIdentical) {
                     EXPECT_GT(shadowed, 20u);  // the light is low enough to cast shadows
                     ++compared;
                 }
-    EXPECT_EQ(compared, 4 * 2 * 2 * 2);
+    // The cone-normal soft shadow, on cns's map.
+    for (TextureFormat format : {TextureFormat::R32F, TextureFormat::R8})
+        for (CameraKind camera : {CameraKind::Orbit, CameraKind::Ortho}) {
+            SCOPED_TRACE(std::string("cns cone ") + std::string(ToString(format)));
+            RenderSettings s;
+            s.method = "cns";
+            s.shadow = ShadowKind::Cone;
+            s.shadowSteps = 13;
+            s.camera = camera;
+            s.viewDir = {0.4f, -0.3f, -0.8f};
+            s.lightDir = {0.5f, 0.6f, 0.6f};
+            s.sampler.precision =
+                format == TextureFormat::R8 ? Precision::Llvmpipe8 : Precision::Float;
+            s.width = s.height = 72;
+            const GlCompareResult r =
+                RunGlCompare(LoadField("builtin:shapes", format), s, Gl());
+            ExpectIdentical(r);
+            EXPECT_EQ(r.shadow.fetchesIdentical, r.shadow.pixels);
+            EXPECT_EQ(r.shadow.visibilityIdentical, r.shadow.pixels);
+            size_t partial = 0;
+            for (float v : r.gl.visibility) partial += v > 0.0f && v < 1.0f;
+            EXPECT_GT(partial, 20u);  // penumbrae, not only lit and blocked
+            ++compared;
+        }
+    EXPECT_EQ(compared, 4 * 2 * 2 * 2 + 4);
 }
 
 // The orthographic texture-space view: every kernel, float and 8-bit, a slanted and a

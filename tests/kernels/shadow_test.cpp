@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <vector>
@@ -212,4 +213,45 @@ TEST(Shadow, NoShadowsCostNothing) {
     const Lit r = LightRays(wall, ShadowJob{}, {kFloor});
     EXPECT_EQ(r.visibility[0], 1.0f);
     EXPECT_EQ(r.fetches[0], 0u);
+}
+
+TEST(Shadow, ConeShadowOnAFlatPlaneIsTheDistanceFieldPenumbra) {
+    // cns's cone-normal map of a flat plane holds n_z = 1 (a 180-degree cone: nothing is
+    // near), so every sample lies a = rise above the surface with d = a, and k d / s = k
+    // /
+    // |(lu, lv, 1)| whatever the step: visibility min(1, k / 1.118034) for lu = 0.3, lv =
+    // -0.4.
+    const DepthField flat = MakeBuiltinMap("flat", 32, 32);
+    const float len = std::sqrt(0.3f * 0.3f + 0.4f * 0.4f + 1.0f);
+    for (float k : {0.5f, 1.0f, 8.0f}) {
+        ShadowJob s = Job(ShadowKind::Cone, 0.3f, -0.4f);
+        s.penumbra = k;
+        s.rayLength = len;
+        const Lit r = LightRays(flat, s, {{0.3f, 0.7f}, {0.9f, 0.1f}}, "cns");
+        for (size_t i = 0; i < 2; ++i) {
+            EXPECT_NEAR(r.visibility[i], std::min(1.0, double(k) / 1.118034), 1e-5) << k;
+            EXPECT_EQ(r.fetches[i], 16u);
+        }
+    }
+}
+
+TEST(Shadow, ConeShadowIsBlockedWhereTheHardShadowIs) {
+    // Behind the wall the ray meets the surface at the hard shadow's sample (1 + 11
+    // fetches): visibility 0. Away from it the light stays, softened by the cones.
+    const DepthField wall = Wall();
+    ShadowJob s = Job(ShadowKind::Cone, 0.25f, 0.0f);
+    s.rayLength = std::sqrt(0.25f * 0.25f + 1.0f);
+    Lit r = LightRays(wall, s, {kFloor}, "cns");
+    EXPECT_EQ(r.visibility[0], 0.0f);
+    EXPECT_EQ(r.fetches[0], 12u);
+    s.lu = -0.25f;
+    r = LightRays(wall, s, {kFloor}, "cns");
+    EXPECT_GT(r.visibility[0], 0.0f);
+    EXPECT_LE(r.visibility[0], 1.0f);
+    EXPECT_EQ(r.fetches[0], 16u);
+    // A small penumbra factor darkens what the cones see as near: the estimate grows
+    // with k.
+    s.penumbra = 0.05f;
+    const Lit dim = LightRays(wall, s, {kFloor}, "cns");
+    EXPECT_LT(dim.visibility[0], r.visibility[0]);
 }

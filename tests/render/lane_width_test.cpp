@@ -121,8 +121,13 @@ TEST(LaneWidth, EveryWidthRendersTheSameFrame) {
 // width and thread count gives the same light rays, visibility and shading.
 TEST(LaneWidth, EveryWidthCastsTheSameShadows) {
     const DepthField shapes = MakeBuiltinMap("shapes", 64, 64);
-    for (ShadowKind kind : {ShadowKind::Hard, ShadowKind::Soft})
-        for (const char* method : {"relief", "csm", "pom"}) {
+    const std::pair<ShadowKind, const char*> cases[] = {
+        {ShadowKind::Hard, "relief"}, {ShadowKind::Hard, "csm"},
+        {ShadowKind::Hard, "pom"},    {ShadowKind::Soft, "relief"},
+        {ShadowKind::Soft, "csm"},    {ShadowKind::Soft, "pom"},
+        {ShadowKind::Cone, "cns"}};
+    for (const auto& [kind, method] : cases) {
+        {
             RenderSettings s;
             s.method = method;
             s.width = 77, s.height = 53;
@@ -152,6 +157,7 @@ TEST(LaneWidth, EveryWidthCastsTheSameShadows) {
                 }
             }
         }
+    }
 }
 
 TEST(LaneWidth, ExecutedLaneCostMatchesTheGroupOracle) {
