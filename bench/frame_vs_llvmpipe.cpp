@@ -95,7 +95,9 @@ int Run(int argc, char** argv) {
                 std::string(kTextureFormatNames.Name(s.sampler.precision)).c_str(),
                 std::string(ToString(s.sampler.filter)).c_str(),
                 std::string(ToString(s.sampler.wrap)).c_str(), threads);
-    std::printf("cpu: %s; llvmpipe: %s\n", CpuModel().c_str(), gl.Renderer().c_str());
+    std::printf("cpu: %s (footprints: %s, RS_FOOTPRINT); llvmpipe: %s\n",
+                CpuModel().c_str(), GatherFootprints() ? "gather" : "loads",
+                gl.Renderer().c_str());
     std::printf("fetches/px %.3f, lane-fetches (4x2) %llu; records bit-identical: %s\n",
                 warm.summary.avgFetches, (unsigned long long)warm.summary.laneFetches4x2,
                 cmp.AllIdentical() ? "yes" : "NO");

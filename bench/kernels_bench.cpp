@@ -133,6 +133,8 @@ BENCHMARK_TEMPLATE(BM_SampleScalar, true);
 BENCHMARK_TEMPLATE(BM_SampleScalar, false);
 
 const int kRegistered = [] {
+    benchmark::AddCustomContext("footprints (RS_FOOTPRINT)",
+                                GatherFootprints() ? "gather" : "loads");
     for (const LaneWidthInfo& w : LaneWidths()) {
         benchmark::RegisterBenchmark(
             ("BM_SampleChain/" + std::to_string(w.width)).c_str(), BM_SampleChain, w,

@@ -81,10 +81,22 @@ struct LaneTextures {
     int64_t cone8Count = 0;             ///< all layers
     bool coneSquared = false;
     Filter coneFilter = Filter::Bilinear;
+    /// How the x86 units read a bilinear footprint (FootprintLoads()): gathers of texel
+    /// pairs, or paired 64-bit loads. The same texels either way.
+    bool gatherFootprints = false;
 };
+
+/// How the lane units read footprints on this CPU: true = 64-bit pair gathers
+/// (vgatherdpd), false = two scalar 64-bit loads per lane and row. Measured with
+/// bench/kernels_bench BM_SampleChain (docs/benchmarks.md): on Intel (Sapphire Rapids)
+/// the gathers run 1.5-3x faster; on AMD Zen 4 a gather costs about 8 cycles and AMD's
+/// guide says to avoid them, so loads. $RS_FOOTPRINT=gather|loads overrides (to
+/// measure both on one machine). Results are identical either way.
+bool GatherFootprints();
 
 inline LaneTextures BindLanes(const Textures& t) {
     LaneTextures b;
+    b.gatherFootprints = GatherFootprints();
     b.field = t.depth;
     b.sampler = t.sampler;
     b.width = t.depth->width;
@@ -242,18 +254,86 @@ RS_INLINE void Footprint8(const float* data, int64_t stride, const int32_t* at, 
         (row == 0 ? t10 : t11) = V(_mm256_shuffle_ps(a, b, 0xDD));
     }
 }
+
+/// Footprint8 with gathers: per row, two vgatherdpd of the lanes' texel pairs (lanes
+/// 0..3 and 4..7), rearranged as Footprint8's registers.
+template <class V>
+RS_INLINE void Footprint8Gather(const float* data, int64_t stride, __m256i at, V& t00,
+                                V& t10, V& t01, V& t11) {
+    const __m128i lo = _mm256_castsi256_si128(at);
+    const __m128i hi = _mm256_extracti128_si256(at, 1);
+    for (int row = 0; row < 2; ++row) {
+        const double* p = reinterpret_cast<const double*>(data + row * stride);
+        const __m256 a = _mm256_castpd_ps(_mm256_i32gather_pd(p, lo, 4));
+        const __m256 b = _mm256_castpd_ps(_mm256_i32gather_pd(p, hi, 4));
+        const __m256 x = _mm256_permute2f128_ps(a, b, 0x20);  // lanes 0, 1, 4, 5
+        const __m256 y = _mm256_permute2f128_ps(a, b, 0x31);  // lanes 2, 3, 6, 7
+        (row == 0 ? t00 : t01) = V(_mm256_shuffle_ps(x, y, 0x88));
+        (row == 0 ? t10 : t11) = V(_mm256_shuffle_ps(x, y, 0xDD));
+    }
+}
+#endif
+
+#if defined(__AVX512F__) && defined(__AVX512DQ__)
+/// The footprints of 16 lanes with gathers: per row, two vgatherdpd of the texel pairs
+/// (lanes 0..7 and 8..15), whose even and odd floats are texels 0 and 1.
+template <class V>
+RS_INLINE void Footprint16Gather(const float* data, int64_t stride, __m512i at, V& t00,
+                                 V& t10, V& t01, V& t11) {
+    const __m256i lo = _mm512_castsi512_si256(at);
+    const __m256i hi = _mm512_extracti64x4_epi64(at, 1);
+    const __m512i even =
+        _mm512_set_epi32(30, 28, 26, 24, 22, 20, 18, 16, 14, 12, 10, 8, 6, 4, 2, 0);
+    const __m512i odd =
+        _mm512_set_epi32(31, 29, 27, 25, 23, 21, 19, 17, 15, 13, 11, 9, 7, 5, 3, 1);
+    for (int row = 0; row < 2; ++row) {
+        const double* p = reinterpret_cast<const double*>(data + row * stride);
+        const __m512 a = _mm512_castpd_ps(_mm512_i32gather_pd(lo, p, 4));
+        const __m512 b = _mm512_castpd_ps(_mm512_i32gather_pd(hi, p, 4));
+        (row == 0 ? t00 : t01) = V(_mm512_permutex2var_ps(a, even, b));
+        (row == 0 ? t10 : t11) = V(_mm512_permutex2var_ps(a, odd, b));
+    }
+}
 #endif
 
 template <class L>
 RS_INLINE Footprint<L> LoadFootprint(const float* data, [[maybe_unused]] int64_t count,
-                                     int64_t stride, const typename L::I& base) {
+                                     int64_t stride, const typename L::I& base,
+                                     [[maybe_unused]] bool gather) {
     using F = typename L::F;
     constexpr int N = L::kWidth;
+    [[maybe_unused]] constexpr size_t kIntBytes = sizeof(typename L::I);
+    Footprint<L> f;
+#if defined(__AVX512F__) && defined(__AVX512DQ__)
+    if constexpr (N == 16 && kIntBytes == 64) {
+        if (gather) {
+#if !defined(NDEBUG)
+            for (int k = 0; k < N; ++k)
+                RS_DCHECK(base[k] >= 0 && base[k] + stride + 1 < count);
+#endif
+            Footprint16Gather(data, stride, static_cast<__m512i>(base), f.t00, f.t10,
+                              f.t01, f.t11);
+            return f;
+        }
+    }
+#endif
+#if defined(__AVX2__)
+    if constexpr (N == 8 && kIntBytes == 32) {
+        if (gather) {
+#if !defined(NDEBUG)
+            for (int k = 0; k < N; ++k)
+                RS_DCHECK(base[k] >= 0 && base[k] + stride + 1 < count);
+#endif
+            Footprint8Gather(data, stride, static_cast<__m256i>(base), f.t00, f.t10,
+                             f.t01, f.t11);
+            return f;
+        }
+    }
+#endif
     alignas(64) int32_t at[N];
     base.copy_to(at, stdx::vector_aligned);
     for ([[maybe_unused]] int k = 0; k < N; ++k)
         RS_DCHECK(at[k] >= 0 && at[k] + stride + 1 < count);
-    Footprint<L> f;
 #if defined(__AVX2__)
     if constexpr (N == 8) {
         Footprint8(data, stride, at, f.t00, f.t10, f.t01, f.t11);
@@ -373,8 +453,8 @@ RS_INLINE typename L::F SamplePaddedLanes(const LaneTextures& tex, const float* 
     }
     auto s = WrapLinearLanes<L>(u, tex.width, st.wrap, tex.pow2W);
     auto t = WrapLinearLanes<L>(v, tex.height, st.wrap, tex.pow2H);
-    const auto f =
-        LoadFootprint<L>(data, count, tex.stride, t.i0 * I(tex.stride) + s.i0 + off);
+    const auto f = LoadFootprint<L>(
+        data, count, tex.stride, t.i0 * I(tex.stride) + s.i0 + off, tex.gatherFootprints);
     if constexpr (kCount) Assign(active, texelReads, texelReads + F(4.0f));
     if (filter == Filter::Min4) {
         const F r0 = Select(s.w != F(0.0f), ::reliefsim::MinSse(f.t00, f.t10), f.t00);
@@ -486,11 +566,11 @@ RS_INLINE typename L::F SampleHeightConeLanes(
             auto s = detail::WrapLinearLanes<L>(u, tex.width, st.wrap, tex.pow2W);
             auto t = detail::WrapLinearLanes<L>(v, tex.height, st.wrap, tex.pow2H);
             const I base = t.i0 * I(tex.stride) + s.i0;
-            const auto fh =
-                detail::LoadFootprint<L>(tex.padded, tex.paddedCount, tex.stride, base);
-            const auto fc =
-                detail::LoadFootprint<L>(tex.conePadded, tex.conePaddedCount, tex.stride,
-                                         base + layer * I(int(tex.paddedCount)));
+            const auto fh = detail::LoadFootprint<L>(
+                tex.padded, tex.paddedCount, tex.stride, base, tex.gatherFootprints);
+            const auto fc = detail::LoadFootprint<L>(
+                tex.conePadded, tex.conePaddedCount, tex.stride,
+                base + layer * I(int(tex.paddedCount)), tex.gatherFootprints);
             Assign(active, texelReads, texelReads + F(4.0f));
             if (st.filter == Filter::Min4) {
                 auto min4 = [&](const detail::Footprint<L>& f) {

@@ -1,13 +1,32 @@
 #include "texture/padded_texels.h"
 
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
 #include <string>
+#include <string_view>
 
 #include "core/error.h"
 #include "texture/lane_sampler.h"
 
 namespace reliefsim {
+
+bool GatherFootprints() {
+    static const bool gather = [] {
+        if (const char* env = std::getenv("RS_FOOTPRINT")) {
+            const std::string_view mode(env);
+            if (mode == "gather") return true;
+            if (mode == "loads") return false;
+        }
+#if (defined(__x86_64__) || defined(__i386__)) && \
+    (defined(__GNUC__) || defined(__clang__))
+        return __builtin_cpu_is("intel") != 0;
+#else
+        return false;
+#endif
+    }();
+    return gather;
+}
 
 PaddedTexels PadTexels(const DepthField& field, WrapMode wrap) {
     RS_CHECK(!field.Empty());
