@@ -303,14 +303,12 @@ RS_INLINE Footprint<L> LoadFootprint(const float* data, [[maybe_unused]] int64_t
     using F = typename L::F;
     constexpr int N = L::kWidth;
     [[maybe_unused]] constexpr size_t kIntBytes = sizeof(typename L::I);
+    for ([[maybe_unused]] int k = 0; k < N; ++k)
+        RS_DCHECK(base[k] >= 0 && base[k] + stride + 1 < count);
     Footprint<L> f;
 #if defined(__AVX512F__) && defined(__AVX512DQ__)
     if constexpr (N == 16 && kIntBytes == 64) {
         if (gather) {
-#if !defined(NDEBUG)
-            for (int k = 0; k < N; ++k)
-                RS_DCHECK(base[k] >= 0 && base[k] + stride + 1 < count);
-#endif
             Footprint16Gather(data, stride, static_cast<__m512i>(base), f.t00, f.t10,
                               f.t01, f.t11);
             return f;
@@ -320,10 +318,6 @@ RS_INLINE Footprint<L> LoadFootprint(const float* data, [[maybe_unused]] int64_t
 #if defined(__AVX2__)
     if constexpr (N == 8 && kIntBytes == 32) {
         if (gather) {
-#if !defined(NDEBUG)
-            for (int k = 0; k < N; ++k)
-                RS_DCHECK(base[k] >= 0 && base[k] + stride + 1 < count);
-#endif
             Footprint8Gather(data, stride, static_cast<__m256i>(base), f.t00, f.t10,
                              f.t01, f.t11);
             return f;
@@ -332,8 +326,6 @@ RS_INLINE Footprint<L> LoadFootprint(const float* data, [[maybe_unused]] int64_t
 #endif
     alignas(64) int32_t at[N];
     base.copy_to(at, stdx::vector_aligned);
-    for ([[maybe_unused]] int k = 0; k < N; ++k)
-        RS_DCHECK(at[k] >= 0 && at[k] + stride + 1 < count);
 #if defined(__AVX2__)
     if constexpr (N == 8) {
         Footprint8(data, stride, at, f.t00, f.t10, f.t01, f.t11);
