@@ -130,16 +130,14 @@ RS_INLINE void TripPack(const typename K::Params& params, const BatchJob& job,
     Sample<L> sampled;
     if constexpr (KernelReadsAllLayers<K>) {
         // One fetch of every stacked cone at the point: the layers' (depth, value)
-        // pairs, each a footprint (the twin's texture calls on the layer array).
+        // pairs, each a footprint (the twin's texture calls on the layer array), with
+        // the wrap, weights and depth computed once.
         constexpr int kLayers = KernelConeLayers<K>();
         static_assert(kLayers <= kMaxStackedCones);
         using I = typename L::I;
-        sampled.h = SampleHeightConeLanes<L>(tex, p.fetch.u, p.fetch.v, I(0), p.active,
-                                             p.texels, sampled.ratio);
-        sampled.stack[0] = sampled.ratio;
-        for (int l = 1; l < kLayers; ++l)
-            SampleHeightConeLanes<L>(tex, p.fetch.u, p.fetch.v, I(l), p.active, p.texels,
-                                     sampled.stack[size_t(l)]);
+        sampled.h = SampleHeightConeStackLanes<L, kLayers>(
+            tex, p.fetch.u, p.fetch.v, I(0), p.active, p.texels, sampled.stack.data());
+        sampled.ratio = sampled.stack[0];
     } else if constexpr (KernelReadsRatio<K>)
         sampled.h = SampleHeightConeLanes<L>(tex, p.fetch.u, p.fetch.v, p.fetch.layer,
                                              p.active, p.texels, sampled.ratio);
@@ -228,15 +226,34 @@ void MarchPacks(const typename K::Params& params, const BatchJob& job, LaneBatch
 /// Packs a lane width keeps in flight (measured: bench/kernels_bench BM_Kernel).
 inline constexpr int kPacksInFlight = RS_PACKS_IN_FLIGHT;
 
-/// The batch entry point of one lane width: every pack of the batch, for the job's
-/// kernel.
-template <class L>
-void RunBatch(const BatchJob& job, LaneBatch& b) {
+/// A lane width's kernels are compiled in kBatchParts units (the part of kernel index i
+/// is i % kBatchParts), so that the per-ISA units build in parallel and a change to one
+/// kernel rebuilds only its part.
+inline constexpr int kBatchParts = 4;
+
+template <class K, class... Ks>
+constexpr int KernelIndexIn(KernelList<Ks...>) {
+    int i = 0, found = -1;
+    ((std::is_same_v<K, Ks> ? (found = i, ++i) : ++i), ...);
+    return found;
+}
+/// K's index in KernelTypes.
+template <class K>
+inline constexpr int kKernelIndex = KernelIndexIn<K>(KernelTypes{});
+
+/// The batch entry point of one part of a lane width: every pack of the batch, for the
+/// job's kernel, which must belong to part kPart.
+template <class L, int kPart>
+void RunBatchPart(const BatchJob& job, LaneBatch& b) {
     VisitKernelType(job.kernelIndex, [&](auto type) {
         using K = typename decltype(type)::type;
-        const auto& params = *static_cast<const typename K::Params*>(job.params);
-        MarchPacks<K, L, kPacksInFlight>(params, job, b,
-                                         [](const auto&, const auto&, const auto&) {});
+        if constexpr (kKernelIndex<K> % kBatchParts == kPart) {
+            const auto& params = *static_cast<const typename K::Params*>(job.params);
+            MarchPacks<K, L, kPacksInFlight>(
+                params, job, b, [](const auto&, const auto&, const auto&) {});
+        } else {
+            RS_CHECK(false);  // dispatched to the wrong part
+        }
     });
 }
 
@@ -335,8 +352,16 @@ void SampleLanes(const Textures& textures, const float* u0, const float* v0, int
     namespace {                                                                         \
     struct Isa##suffix {};                                                              \
     }                                                                                   \
+    void RunBatch##suffix##Part0(const BatchJob& job, LaneBatch& batch);                \
+    void RunBatch##suffix##Part1(const BatchJob& job, LaneBatch& batch);                \
+    void RunBatch##suffix##Part2(const BatchJob& job, LaneBatch& batch);                \
+    void RunBatch##suffix##Part3(const BatchJob& job, LaneBatch& batch);                \
     void RunBatch##suffix(const BatchJob& job, LaneBatch& batch) {                      \
-        detail::RunBatch<Lanes<width, Isa##suffix>>(job, batch);                        \
+        static_assert(detail::kBatchParts == 4);                                        \
+        static constexpr BatchFn kParts[] = {                                           \
+            &RunBatch##suffix##Part0, &RunBatch##suffix##Part1,                         \
+            &RunBatch##suffix##Part2, &RunBatch##suffix##Part3};                        \
+        kParts[job.kernelIndex % detail::kBatchParts](job, batch);                      \
     }                                                                                   \
     float SampleChain##suffix(const Textures& textures, const float* u, const float* v, \
                               int n, int chain, uint64_t* texelReads) {                 \
@@ -347,4 +372,16 @@ void SampleLanes(const Textures& textures, const float* u0, const float* v0, int
                              int n, float* out, uint32_t* texels) {                     \
         detail::SampleLanes<Lanes<width, Isa##suffix>>(textures, u, v, n, out, texels); \
     }                                                                                   \
+    }
+
+/// One part of a lane width's kernels (render/CMakeLists.txt generates a unit per part,
+/// compiled with the width's flags).
+#define RS_DEFINE_LANE_WIDTH_PART(suffix, width, part)                           \
+    namespace reliefsim {                                                        \
+    namespace {                                                                  \
+    struct Isa##suffix##part {};                                                 \
+    }                                                                            \
+    void RunBatch##suffix##Part##part(const BatchJob& job, LaneBatch& batch) {   \
+        detail::RunBatchPart<Lanes<width, Isa##suffix##part>, part>(job, batch); \
+    }                                                                            \
     }

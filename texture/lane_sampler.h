@@ -502,20 +502,23 @@ RS_INLINE typename L::F SampleHeightLanes(const LaneTextures& tex, const typenam
     return out;
 }
 
-/// One fetch per active lane of the cone kernels' combined texture: returns the depth
-/// (SampleHeightLanes exactly) and sets `ratio` to the ratio channel of each lane's
-/// `layer` sampled with the same coordinates, footprint and weights (an RG texture, or
-/// an RG texture array, on the GL side), squared when the map stores sqrt(r). One
-/// footprint of texels is read per fetch, as for the depth alone.
-template <class L>
-RS_INLINE typename L::F SampleHeightConeLanes(
+/// One fetch per active lane of the cone kernels' combined texture, reading kLayers
+/// consecutive layers from each lane's `layer` on: returns the depth (SampleHeightLanes
+/// exactly) and sets ratio[l] to layer + l's ratio channel sampled with the same
+/// coordinates, footprint and weights (an RG texture, or an RG texture array, on the GL
+/// side), squared when the map stores sqrt(r). The wrap, the weights and the depth are
+/// computed once; the texel reads counted are those of kLayers single-layer fetches (one
+/// footprint per layer: the twin's texture calls).
+template <class L, int kLayers>
+RS_INLINE typename L::F SampleHeightConeStackLanes(
     const LaneTextures& tex, const typename L::F& u, const typename L::F& v,
     const typename L::I& layer, const typename L::M& active, typename L::F& texelReads,
-    typename L::F& ratio) {
+    typename L::F* ratio) {
     using F = typename L::F;
     using I = typename L::I;
     const SamplerState& st = tex.sampler;
-    F h(0.0f), c(0.0f);
+    F h(0.0f);
+    F c[kLayers];
     if (tex.depth8) {
         const auto s = detail::WrapLinearFixed8Lanes<L>(u, tex.width, st.wrap, tex.pow2W);
         const auto t =
@@ -533,16 +536,24 @@ RS_INLINE typename L::F SampleHeightConeLanes(
                    F(float(1.0 / 255.0));
         };
         h = lerp2(tex.depth8, tex.depth8Count, I(0));
-        c = lerp2(tex.cone8, tex.cone8Count, layer * I(int(tex.depth8Count)));
-        Assign(active, texelReads, texelReads + F(4.0f));
+        for (int l = 0; l < kLayers; ++l)
+            c[l] = lerp2(tex.cone8, tex.cone8Count,
+                         (layer + I(l)) * I(int(tex.depth8Count)));
+        Assign(active, texelReads, texelReads + F(4.0f * float(kLayers)));
     } else if (tex.padded && tex.coneFilter != st.filter) {
-        // cone_filter differs from the height's: two samples, each with its own
-        // footprint (two texture calls on the twin), both counted.
+        // cone_filter differs from the height's: a depth sample and a ratio sample per
+        // layer, each with its own footprint (two texture calls per layer on the twin),
+        // all counted.
         h = detail::SamplePaddedLanes<L>(tex, tex.padded, tex.paddedCount, st.filter, u,
                                          v, I(0), active, texelReads);
-        c = detail::SamplePaddedLanes<L>(
-            tex, tex.conePadded, tex.conePaddedCount, tex.coneFilter, u, v,
-            layer * I(int(tex.paddedCount)), active, texelReads);
+        if constexpr (kLayers > 1) {
+            const float depthReads = st.filter == Filter::Nearest ? 1.0f : 4.0f;
+            Assign(active, texelReads, texelReads + F(depthReads * float(kLayers - 1)));
+        }
+        for (int l = 0; l < kLayers; ++l)
+            c[l] = detail::SamplePaddedLanes<L>(
+                tex, tex.conePadded, tex.conePaddedCount, tex.coneFilter, u, v,
+                (layer + I(l)) * I(int(tex.paddedCount)), active, texelReads);
     } else if (tex.padded) {
         if (st.filter == Filter::Nearest) {
             const I i = detail::WrapNearestLanes<L>(u, tex.width, st.wrap, tex.pow2W);
@@ -550,20 +561,18 @@ RS_INLINE typename L::F SampleHeightConeLanes(
             const I at = j * I(tex.stride) + i;
             h = detail::GatherLanes<F, L::kWidth>(tex.padded, size_t(tex.paddedCount),
                                                   at);
-            c = detail::GatherLanes<F, L::kWidth>(tex.conePadded,
-                                                  size_t(tex.conePaddedCount),
-                                                  at + layer * I(int(tex.paddedCount)));
-            Assign(active, texelReads, texelReads + F(1.0f));
+            for (int l = 0; l < kLayers; ++l)
+                c[l] = detail::GatherLanes<F, L::kWidth>(
+                    tex.conePadded, size_t(tex.conePaddedCount),
+                    at + (layer + I(l)) * I(int(tex.paddedCount)));
+            Assign(active, texelReads, texelReads + F(float(kLayers)));
         } else {
             auto s = detail::WrapLinearLanes<L>(u, tex.width, st.wrap, tex.pow2W);
             auto t = detail::WrapLinearLanes<L>(v, tex.height, st.wrap, tex.pow2H);
             const I base = t.i0 * I(tex.stride) + s.i0;
             const auto fh = detail::LoadFootprint<L>(
                 tex.padded, tex.paddedCount, tex.stride, base, tex.gatherFootprints);
-            const auto fc = detail::LoadFootprint<L>(
-                tex.conePadded, tex.conePaddedCount, tex.stride,
-                base + layer * I(int(tex.paddedCount)), tex.gatherFootprints);
-            Assign(active, texelReads, texelReads + F(4.0f));
+            Assign(active, texelReads, texelReads + F(4.0f * float(kLayers)));
             if (st.filter == Filter::Min4) {
                 auto min4 = [&](const detail::Footprint<L>& f) {
                     const F r0 = Select(s.w != F(0.0f), MinSse(f.t00, f.t10), f.t00);
@@ -571,7 +580,11 @@ RS_INLINE typename L::F SampleHeightConeLanes(
                     return Select(t.w != F(0.0f), MinSse(r0, r1), r0);
                 };
                 h = min4(fh);
-                c = min4(fc);
+                for (int l = 0; l < kLayers; ++l)
+                    c[l] = min4(detail::LoadFootprint<L>(
+                        tex.conePadded, tex.conePaddedCount, tex.stride,
+                        base + (layer + I(l)) * I(int(tex.paddedCount)),
+                        tex.gatherFootprints));
             } else {
                 if (st.precision == Precision::Gpu8) {
                     s.w = stdx::nearbyint(s.w * F(256.0f)) * F(1.0f / 256.0f);
@@ -583,26 +596,47 @@ RS_INLINE typename L::F SampleHeightConeLanes(
                     return Fma(t.w, r1 - r0, r0);
                 };
                 h = lerp(fh);
-                c = lerp(fc);
+                for (int l = 0; l < kLayers; ++l)
+                    c[l] = lerp(detail::LoadFootprint<L>(
+                        tex.conePadded, tex.conePaddedCount, tex.stride,
+                        base + (layer + I(l)) * I(int(tex.paddedCount)),
+                        tex.gatherFootprints));
             }
         }
     } else {
+        for (int l = 0; l < kLayers; ++l) c[l] = F(0.0f);
         for (int k = 0; k < L::kWidth; ++k) {
             if (!active[k]) continue;
-            FetchCounts counts;
-            h[k] = SampleCounted(*tex.field, st, u[k], v[k], &counts);
-            FetchCounts cone;
-            RS_DCHECK(layer[k] >= 0 && layer[k] < tex.coneLayers);
             SamplerState coneState = st;
             coneState.filter = tex.coneFilter;
-            c[k] = SampleCounted(*tex.coneField[layer[k]], coneState, u[k], v[k], &cone);
-            texelReads[k] = texelReads[k] + float(counts.nTexelReads);
-            if (tex.coneFilter != st.filter)  // a second sample with its own footprint
-                texelReads[k] = texelReads[k] + float(cone.nTexelReads);
+            for (int l = 0; l < kLayers; ++l) {
+                FetchCounts counts;
+                const float hk = SampleCounted(*tex.field, st, u[k], v[k], &counts);
+                if (l == 0) h[k] = hk;
+                FetchCounts cone;
+                const int layerK = layer[k] + l;
+                RS_DCHECK(layerK >= 0 && layerK < tex.coneLayers);
+                c[l][k] = SampleCounted(*tex.coneField[size_t(layerK)], coneState, u[k],
+                                        v[k], &cone);
+                texelReads[k] = texelReads[k] + float(counts.nTexelReads);
+                if (tex.coneFilter !=
+                    st.filter)  // a second sample with its own footprint
+                    texelReads[k] = texelReads[k] + float(cone.nTexelReads);
+            }
         }
     }
-    ratio = tex.coneSquared ? c * c : c;
+    for (int l = 0; l < kLayers; ++l) ratio[l] = tex.coneSquared ? c[l] * c[l] : c[l];
     return h;
+}
+
+/// One fetch per active lane of the cone kernels' combined texture: the depth, and the
+/// ratio of each lane's `layer` (SampleHeightConeStackLanes with one layer).
+template <class L>
+RS_INLINE typename L::F SampleHeightConeLanes(
+    const LaneTextures& tex, const typename L::F& u, const typename L::F& v,
+    const typename L::I& layer, const typename L::M& active, typename L::F& texelReads,
+    typename L::F& ratio) {
+    return SampleHeightConeStackLanes<L, 1>(tex, u, v, layer, active, texelReads, &ratio);
 }
 
 }  // namespace reliefsim
