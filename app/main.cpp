@@ -6,6 +6,7 @@
 
 #include "app/commands.h"
 #include "core/error.h"
+#include "core/param_name.h"
 
 namespace {
 
@@ -18,6 +19,8 @@ void PrintError(const std::string& message) {
 
 int main(int argc, char** argv) {
     using namespace reliefsim;
+    // Library errors name their parameters; here they are the command line's flags.
+    SetParamNamer(&FlagName);
     CLI::App app{
         "reliefsim: simulate, on the CPU, how a GPU runs height-field ray-intersection "
         "fragment shaders, counting every fetch"};

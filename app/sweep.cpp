@@ -15,6 +15,7 @@
 #include "app/render_options.h"
 #include "core/error.h"
 #include "core/output_set.h"
+#include "core/param_name.h"
 #include "render/frame.h"
 #include "render/outputs.h"
 #include "texture/image_io.h"
@@ -323,6 +324,8 @@ void ProgressBar(int done, int total, const std::string& what) {
 
 std::vector<SweepConfig> ParseSweepConfig(const std::string& text,
                                           const std::string& subject) {
+    // A configuration names parameters by their keys ("view_angle"), not by flags.
+    const ScopedParamNamer keys(nullptr);
     ojson root;
     try {
         root = ojson::parse(text);

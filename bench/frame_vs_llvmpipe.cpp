@@ -21,6 +21,7 @@
 
 #include "app/glcompare.h"
 #include "core/error.h"
+#include "core/param_name.h"
 #include "metrics/record_compare.h"
 #include "render/frame.h"
 
@@ -114,6 +115,7 @@ int Run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    reliefsim::SetParamNamer(&reliefsim::FlagName);  // errors name the flags
     try {
         return Run(argc, argv);
     } catch (const std::exception& e) {

@@ -8,10 +8,16 @@
 //   uncounted
 //                                 (bench/raw_chain_avx2.cpp): the reference point
 //   BM_SampleScalar<counted>      the scalar Sampler, counted and uncounted
+//   BM_AnimateFrame/<threads>     `render --animate`'s frame: the 256² sinusoid map
+//                                 regenerated, adaptive ACM4, acm4 rendered at 512²
+//                                 (frames/s counter; the ACM paper's 50 frames/s)
 #include <benchmark/benchmark.h>
 
 #include "bench/raw_chain.h"
+#include "core/memory.h"
+#include "maps/cone_map.h"
 #include "render/batch.h"
+#include "render/frame.h"
 #include "render/kernel_maps.h"
 #include "texture/procedural.h"
 #include "texture/sampler.h"
@@ -131,6 +137,26 @@ void BM_SampleScalar(benchmark::State& state) {
 }
 BENCHMARK_TEMPLATE(BM_SampleScalar, true);
 BENCHMARK_TEMPLATE(BM_SampleScalar, false);
+
+void BM_AnimateFrame(benchmark::State& state) {
+    KeepFreedMemoryInHeap();  // as `render --animate` does
+    RenderSettings s;
+    s.method = "acm4";
+    s.width = s.height = 512;
+    s.reference = false;
+    s.threads = int(state.range(0));
+    s.maps.generator = AdaptiveMapGenerator(0.25f, 3);
+    DepthField field;
+    int frame = 0;
+    for (auto _ : state) {
+        FillSinusoidMap(field, 256, 256, float(frame++) / 30.0f);
+        const RenderOutput out = Render(field, s);
+        benchmark::DoNotOptimize(out.record.nFetches.data());
+    }
+    state.counters["frames/s"] =
+        benchmark::Counter(double(state.iterations()), benchmark::Counter::kIsRate);
+}
+BENCHMARK(BM_AnimateFrame)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 const int kRegistered = [] {
     benchmark::AddCustomContext("footprints (RS_FOOTPRINT)",

@@ -1,83 +1,80 @@
-// Derived-map generation benchmarks (issue #3 targets): conservative 8-bit 1024², relaxed
-// 512², plain vs adaptive ACM on the built-in maps, dynamic sinusoid map + adaptive ACM
-// per frame.
+// Derived-map generation (docs/cone_maps.md, Performance): every kind at 1024² on the
+// DirectX SDK rocks resized to 8 and 16 bits, the float built-ins and stones at 2048²
+// (16-bit); the growth with size (256² to 2048²) and its fitted exponent; the ACM paper's
+// dynamic map (regenerate + adaptive ACM4 per frame); plain against adaptive ACM.
+// Maps from ../shared/data are made at run time and skipped when it is absent.
 #include <benchmark/benchmark.h>
 
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <memory>
 #include <string>
+#include <vector>
 
+#include "bench/bench_maps.h"
 #include "maps/cone_map.h"
 #include "texture/procedural.h"
 
 namespace reliefsim {
 namespace {
 
-const char* kMaps[] = {"shapes", "bumps", "steps", "noise"};
+using bench::Quantize;
+using bench::SharedMap;
+using bench::Upsample;
 
-void BM_ConeMapConservative8Bit(benchmark::State& state) {
-    const int n = int(state.range(0));
-    const DepthField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", n, n));
-    for (auto _ : state) benchmark::DoNotOptimize(GenerateConeMap(hf, ConeKind::Cone));
-    state.SetItemsProcessed(state.iterations() * int64_t(n) * n);
-}
-BENCHMARK(BM_ConeMapConservative8Bit)
-    ->Arg(256)
-    ->Arg(1024)
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
+struct NamedKind {
+    const char* name;
+    ConeKind kind;
+};
+constexpr NamedKind kKinds[] = {{"cone", ConeKind::Cone},
+                                {"relaxed", ConeKind::Relaxed},
+                                {"relaxed-exact", ConeKind::RelaxedExact},
+                                {"quad", ConeKind::Quad},
+                                {"acm4", ConeKind::Acm4},
+                                {"acm8", ConeKind::Acm8},
+                                {"cone-normal", ConeKind::ConeNormal},
+                                {"stacked", ConeKind::Stacked}};
 
-void BM_ConeMapRelaxed(benchmark::State& state) {
-    const int n = int(state.range(0));
-    const DepthField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", n, n));
-    for (auto _ : state) benchmark::DoNotOptimize(GenerateConeMap(hf, ConeKind::Relaxed));
-    state.SetItemsProcessed(state.iterations() * int64_t(n) * n);
+void GenerateOnce(benchmark::State& state, std::shared_ptr<const DepthField> field,
+                  ConeKind kind) {
+    for (auto _ : state) benchmark::DoNotOptimize(GenerateConeMap(*field, kind));
+    state.SetItemsProcessed(state.iterations() * int64_t(field->width) *
+                            int64_t(field->height));
 }
-BENCHMARK(BM_ConeMapRelaxed)
-    ->Arg(128)
-    ->Arg(256)
-    ->Arg(512)
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime()
-    ->Iterations(1);
 
-void BM_ConeMapOtherKinds512(benchmark::State& state) {
-    // The kinds without an issue target, 8-bit `shapes` 512² (docs/cone_maps.md,
-    // Performance).
-    static constexpr ConeKind kKinds[] = {ConeKind::Acm8, ConeKind::RelaxedExact,
-                                          ConeKind::Stacked, ConeKind::Quad};
-    const ConeKind kind = kKinds[state.range(0)];
-    const DepthField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 512, 512));
-    for (auto _ : state) benchmark::DoNotOptimize(GenerateConeMap(hf, kind));
-    state.SetLabel(std::string(ToString(kind)));
+/// One benchmark per map and kind, named BM_ConeMap/<map>/<kind>. Each generation is
+/// one iteration (they take seconds).
+void RegisterMap(const std::string& name, std::shared_ptr<const DepthField> field,
+                 bool conservativeOnly = false) {
+    for (const NamedKind& k : kKinds) {
+        if (conservativeOnly && k.kind != ConeKind::Cone) continue;
+        benchmark::RegisterBenchmark(("BM_ConeMap/" + name + "/" + k.name).c_str(),
+                                     GenerateOnce, field, k.kind)
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime()
+            ->Iterations(1);
+    }
 }
-BENCHMARK(BM_ConeMapOtherKinds512)
-    ->DenseRange(0, 3)
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime()
-    ->Iterations(1);
 
-void BM_Acm4PlainSearch(benchmark::State& state) {
-    const DepthField hf =
-        QuantizeToUnorm8(MakeBuiltinMap(kMaps[state.range(0)], 256, 256));
-    for (auto _ : state)
-        benchmark::DoNotOptimize(GenerateSectorMapPlainSearch(hf, ConeKind::Acm4));
-    state.SetLabel(kMaps[state.range(0)]);
+/// The growth with size: rocks (or, without ../shared, noise) at n² float, n = 256 ..
+/// 2048; names BM_ConeMapScaling/<kind>/<n>. The reporter fits the exponent.
+void RegisterScaling(const DepthField& base) {
+    std::map<int, std::shared_ptr<const DepthField>> fields;
+    for (int n : {256, 512, 1024, 2048})
+        fields[n] = std::make_shared<const DepthField>(Upsample(base, n));
+    for (ConeKind k : {ConeKind::Cone, ConeKind::Acm4, ConeKind::Relaxed})
+        for (const auto& [n, field] : fields) {
+            benchmark::RegisterBenchmark(
+                ("BM_ConeMapScaling/" + std::string(ToString(k)) + "/" +
+                 std::to_string(n))
+                    .c_str(),
+                GenerateOnce, field, k)
+                ->Unit(benchmark::kMillisecond)
+                ->UseRealTime()
+                ->Iterations(1);
+        }
 }
-BENCHMARK(BM_Acm4PlainSearch)
-    ->DenseRange(0, 3)
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
-
-void BM_Acm4Adaptive(benchmark::State& state) {
-    const DepthField hf =
-        QuantizeToUnorm8(MakeBuiltinMap(kMaps[state.range(0)], 256, 256));
-    for (auto _ : state)
-        benchmark::DoNotOptimize(GenerateAdaptiveSectorMap(hf, ConeKind::Acm4, 0.25f, 3));
-    state.SetLabel(kMaps[state.range(0)]);
-}
-BENCHMARK(BM_Acm4Adaptive)
-    ->DenseRange(0, 3)
-    ->Unit(benchmark::kMillisecond)
-    ->UseRealTime();
 
 void BM_DynamicSinusoidAdaptiveAcm4(benchmark::State& state) {
     // As `reliefsim maps --animate`: buffers kept across frames, map refilled in place.
@@ -97,7 +94,102 @@ BENCHMARK(BM_DynamicSinusoidAdaptiveAcm4)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+const char* kBuiltins[] = {"shapes", "bumps", "steps", "noise"};
+
+void BM_Acm4PlainSearch(benchmark::State& state) {
+    const DepthField hf =
+        QuantizeToUnorm8(MakeBuiltinMap(kBuiltins[state.range(0)], 256, 256));
+    for (auto _ : state)
+        benchmark::DoNotOptimize(GenerateSectorMapPlainSearch(hf, ConeKind::Acm4));
+    state.SetLabel(kBuiltins[state.range(0)]);
+}
+BENCHMARK(BM_Acm4PlainSearch)
+    ->DenseRange(0, 3)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+void BM_Acm4Adaptive(benchmark::State& state) {
+    const DepthField hf =
+        QuantizeToUnorm8(MakeBuiltinMap(kBuiltins[state.range(0)], 256, 256));
+    for (auto _ : state)
+        benchmark::DoNotOptimize(GenerateAdaptiveSectorMap(hf, ConeKind::Acm4, 0.25f, 3));
+    state.SetLabel(kBuiltins[state.range(0)]);
+}
+BENCHMARK(BM_Acm4Adaptive)
+    ->DenseRange(0, 3)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+
+/// Prints, after the runs, the exponent of the time's growth with the side n of each
+/// kind's scaling family (least squares of log time on log n; N² log N gives about 2.1
+/// to 2.2 over 256..2048).
+class ScalingReporter : public benchmark::ConsoleReporter {
+  public:
+    void ReportRuns(const std::vector<Run>& runs) override {
+        ConsoleReporter::ReportRuns(runs);
+        for (const Run& r : runs) {
+            const std::string name = r.benchmark_name();
+            const std::string prefix = "BM_ConeMapScaling/";
+            if (name.rfind(prefix, 0) != 0 || r.error_occurred) continue;
+            const size_t slash = name.find('/', prefix.size());
+            const std::string kind = name.substr(prefix.size(), slash - prefix.size());
+            const int n = std::stoi(name.substr(slash + 1));
+            points_[kind].push_back(
+                {std::log(double(n)), std::log(r.GetAdjustedRealTime())});
+        }
+    }
+    void Finalize() override {
+        ConsoleReporter::Finalize();
+        for (const auto& [kind, p] : points_) {
+            if (p.size() < 2) continue;
+            double sx = 0, sy = 0, sxx = 0, sxy = 0;
+            for (const auto& [x, y] : p) {
+                sx += x;
+                sy += y;
+                sxx += x * x;
+                sxy += x * y;
+            }
+            const double k = double(p.size());
+            const double slope = (k * sxy - sx * sy) / (k * sxx - sx * sx);
+            std::printf("fitted exponent of %s (time ~ n^e over %zu sizes): e = %.2f\n",
+                        kind.c_str(), p.size(), slope);
+        }
+    }
+
+  private:
+    std::map<std::string, std::vector<std::pair<double, double>>> points_;
+};
+
 }  // namespace
 }  // namespace reliefsim
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+    using namespace reliefsim;
+    benchmark::Initialize(&argc, argv);
+    if (const auto rocks = bench::SharedMap("rocks")) {
+        const DepthField big = Upsample(*rocks, 1024);
+        RegisterMap("rocks1024_8bit",
+                    std::make_shared<const DepthField>(Quantize(big, 8)));
+        RegisterMap("rocks1024_16bit",
+                    std::make_shared<const DepthField>(Quantize(big, 16)));
+        RegisterScaling(*rocks);
+    } else {
+        std::fprintf(stderr,
+                     "maps_bench: %s absent; the rocks and stones maps are skipped\n",
+                     RS_SHARED_DATA);
+        RegisterScaling(MakeBuiltinMap("noise", 256, 256));
+    }
+    RegisterMap("shapes1024_float",
+                std::make_shared<const DepthField>(MakeBuiltinMap("shapes", 1024, 1024)));
+    RegisterMap("noise1024_float",
+                std::make_shared<const DepthField>(MakeBuiltinMap("noise", 1024, 1024)));
+    if (const auto stones = bench::SharedMap("stones"))
+        RegisterMap(
+            "stones2048_16bit",
+            std::make_shared<const DepthField>(Quantize(Upsample(*stones, 2048), 16)),
+            true);
+    reliefsim::ScalingReporter reporter;
+    benchmark::RunSpecifiedBenchmarks(&reporter);
+    benchmark::Shutdown();
+    return 0;
+}

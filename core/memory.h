@@ -3,6 +3,9 @@
 #pragma once
 
 #include <sys/resource.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 #include <algorithm>
 #include <cstdint>
@@ -118,6 +121,17 @@ inline void RequireMemory(uint64_t bytes, const std::string& subject,
     if (double(bytes) > 0.95 * double(avail))
         throw Error(subject + ": needs about " + FormatBytes(bytes) + " of memory, " +
                     FormatBytes(avail) + " available; " + hint);
+}
+
+/// For loops that allocate and free the same large buffers every iteration (`render
+/// --animate`, `maps --animate`, their benchmarks): keeps freed memory in the heap.
+/// glibc otherwise returns blocks above its mmap threshold to the system, and every
+/// iteration faults them in again (measured: 5-30 ms of a 13 ms animated frame here).
+inline void KeepFreedMemoryInHeap() {
+#if defined(__GLIBC__)
+    mallopt(M_MMAP_THRESHOLD, 1 << 30);
+    mallopt(M_TRIM_THRESHOLD, 1 << 30);
+#endif
 }
 
 }  // namespace reliefsim

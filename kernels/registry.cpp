@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/param_name.h"
 
 namespace reliefsim {
 
@@ -37,10 +38,10 @@ const KernelInfo& FindMethod(std::string_view name) {
         valid += std::string(valid.empty() ? "" : ", ") + std::string(m->name);
     valid += ", " + std::string(kExactMethod);
     if (name == kExactMethod)
-        throw Error(
-            "--method exact: the exact reference is not a kernel; only render "
-            "and trace compute it");
-    throw Error("--method \"" + std::string(name) +
+        throw Error(ParamName("method") +
+                    " exact: the exact reference is not a kernel; only render "
+                    "and trace compute it");
+    throw Error(ParamName("method") + " \"" + std::string(name) +
                 "\": unknown; must be one of: " + valid);
 }
 
@@ -51,7 +52,7 @@ ParamValues ResolveParams(const KernelInfo& method,
     for (const auto& s : settings) {
         auto eq = s.find('=');
         if (eq == std::string::npos || eq == 0)
-            throw Error("--set \"" + s + "\": expected key=value");
+            throw Error(ParamName("set") + " \"" + s + "\": expected key=value");
         std::string key = s.substr(0, eq), text = s.substr(eq + 1);
         const ParamDef* def = nullptr;
         for (const auto& p : method.params)
@@ -60,7 +61,7 @@ ParamValues ResolveParams(const KernelInfo& method,
             std::string valid;
             for (const auto& p : method.params)
                 valid += std::string(valid.empty() ? "" : ", ") + std::string(p.name);
-            throw Error("--set " + key + ": not a parameter of method \"" +
+            throw Error(ParamName("set") + " " + key + ": not a parameter of method \"" +
                         std::string(method.name) + "\"; valid: " + valid);
         }
         double v = 0.0;
@@ -75,17 +76,18 @@ ParamValues ResolveParams(const KernelInfo& method,
             std::string names;
             for (const auto& c : def->choices)
                 names += std::string(names.empty() ? "" : ", ") + std::string(c);
-            throw Error("--set " + s.substr(0, eq) + "=" + s.substr(eq + 1) +
-                        ": must be one of: " + names);
+            throw Error(ParamName("set") + " " + s.substr(0, eq) + "=" +
+                        s.substr(eq + 1) + ": must be one of: " + names);
         }
         if (ec != std::errc() || ptr != text.data() + text.size() || !std::isfinite(v))
-            throw Error("--set " + key + "=" + text + ": not a number");
+            throw Error(ParamName("set") + " " + key + "=" + text + ": not a number");
         if (def->integer && v != std::floor(v))
-            throw Error("--set " + key + "=" + text + ": must be an integer");
+            throw Error(ParamName("set") + " " + key + "=" + text +
+                        ": must be an integer");
         if (v < def->minValue || v > def->maxValue)
-            throw Error("--set " + key + "=" + text + ": out of range; valid range [" +
-                        FormatNumber(def->minValue) + ", " + FormatNumber(def->maxValue) +
-                        "]");
+            throw Error(ParamName("set") + " " + key + "=" + text +
+                        ": out of range; valid range [" + FormatNumber(def->minValue) +
+                        ", " + FormatNumber(def->maxValue) + "]");
         values[key] = v;
     }
     return values;
@@ -98,7 +100,7 @@ Kernel MakeKernel(const KernelInfo& method, const ParamValues& values) {
     for (size_t i = 0; i < all.size(); ++i)
         if (all[i] == &method) k.index = int(i);
     if (k.index < 0)
-        throw Error("--method \"" + std::string(method.name) +
+        throw Error(ParamName("method") + " \"" + std::string(method.name) +
                     "\": not in the catalogue");
     for (const ParamSpec& p : method.params) {
         auto it = values.find(p.name);

@@ -13,22 +13,23 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/param_name.h"
 #include "maps/cone_map_detail.h"
 
 namespace reliefsim {
 
 void ValidateConeMapParams(const ConeMapParams& p) {
     if (p.searchSteps < 1 || p.searchSteps > 4096)
-        throw Error("--search-steps " + std::to_string(p.searchSteps) +
+        throw Error(ParamName("search_steps") + " " + std::to_string(p.searchSteps) +
                     ": out of range; expected 1..4096 (Listing 18-2 uses 128)");
     if (p.stackedCount < 1 || p.stackedCount > 16)
-        throw Error("--stacked-count " + std::to_string(p.stackedCount) +
+        throw Error(ParamName("stacked_count") + " " + std::to_string(p.stackedCount) +
                     ": out of range; expected 1..16");
     if (!(p.threshold >= 0.0f && p.threshold <= 1.0f))
-        throw Error(
-            "--threshold: must be a depth difference in [0, 1]; 0 searches every texel");
+        throw Error(ParamName("threshold") +
+                    ": must be a depth difference in [0, 1]; 0 searches every texel");
     if (p.adaptiveLevels < 0 || p.adaptiveLevels > 12)
-        throw Error("--levels " + std::to_string(p.adaptiveLevels) +
+        throw Error(ParamName("levels") + " " + std::to_string(p.adaptiveLevels) +
                     ": out of range; expected 0..12");
 }
 

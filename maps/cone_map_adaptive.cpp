@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/param_name.h"
 #include "maps/cone_map.h"
 #include "maps/cone_map_detail.h"
 
@@ -173,12 +174,12 @@ void GenerateAdaptiveSectorMap(const DepthField& hf, ConeKind kind, float thresh
                                AdaptiveStats* stats) {
     if (!(kind == ConeKind::Cone || kind == ConeKind::Quad || kind == ConeKind::Acm4 ||
           kind == ConeKind::Acm8))
-        throw Error(
-            "--adaptive: applies to kinds \"cone\", \"quad\", \"acm4\", \"acm8\"; got "
-            "\"" +
-            std::string(ToString(kind)) + "\"");
+        throw Error(ParamName("adaptive") +
+                    ": applies to kinds \"cone\", \"quad\", \"acm4\", \"acm8\"; got "
+                    "\"" +
+                    std::string(ToString(kind)) + "\"");
     if (!(threshold >= 0.0f && threshold <= 1.0f))
-        throw Error("--threshold: must be a depth difference in [0, 1]");
+        throw Error(ParamName("threshold") + ": must be a depth difference in [0, 1]");
     const float dmin = CheckedMinDepth(hf);
     const Geometry g = MakeGeometry(hf.width, hf.height);
     const int nS = SectorCount(kind);

@@ -284,9 +284,4 @@ class ProgressCounter {
     std::mutex m_;
 };
 
-/// Conservative ratio of every texel by levels + distance transforms (exact; 8-bit or few
-/// distinct depths). Writes q per texel.
-void ConservativeQByLevels(const DepthField& hf, const Geometry& g,
-                           std::vector<double>& q, const ConeMapProgress& progress = {});
-
 }  // namespace reliefsim::detail

@@ -1,6 +1,6 @@
-// Cone-family generators: fast exact versions (levels + distance transforms, tiled pruned
-// searches), their brute-force oracles, the relaxed Listing 18-2 definition and adaptive
-// ACM.
+// Cone-family generators: the fast exact versions (the lane search of maps/cone_search.h
+// for every conservative kind and relaxed-exact; the pruned Listing search for relaxed
+// cones), their brute-force oracles and the plain tiled search of the ACM paper.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -9,8 +9,10 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/param_name.h"
 #include "maps/cone_map.h"
 #include "maps/cone_map_detail.h"
+#include "maps/cone_search.h"
 
 namespace reliefsim {
 
@@ -24,15 +26,6 @@ void ForEachRow(int H, F&& f) {
                       [&](const tbb::blocked_range<int>& r) {
                           for (int j = r.begin(); j < r.end(); ++j) f(j);
                       });
-}
-
-bool UseLevels(const DepthField& hf) {
-    // The levels path stores vertical distances in 16 bits.
-    if (hf.height >= 0xFFFF || hf.width >= 0xFFFF) return false;
-    if (!hf.depth8.empty()) return true;
-    std::vector<float> v(hf.depth);
-    std::sort(v.begin(), v.end());
-    return std::unique(v.begin(), v.end()) - v.begin() <= 300;
 }
 
 }  // namespace
@@ -71,18 +64,32 @@ ConeMap SearchMap(const DepthField& hf, ConeKind kind, const ConeMapParams& p,
     ConeMap m = MakeMap(hf, outKind, C);
     const int W = hf.width;
 
-    if (mode == Mode::Fast && (kind == ConeKind::Cone || kind == ConeKind::ConeNormal) &&
-        UseLevels(hf)) {
-        std::vector<double> q;
-        ConservativeQByLevels(hf, g, q, p.progress);
-        tbb::parallel_for(tbb::blocked_range<size_t>(0, q.size(), size_t(1) << 14),
-                          [&](const tbb::blocked_range<size_t>& r) {
-                              for (size_t t = r.begin(); t < r.end(); ++t)
-                                  m.values[t] =
-                                      kind == ConeKind::ConeNormal
-                                          ? ConeNormalFromRatio(std::sqrt(q[t]) / g.scale)
-                                          : RatioFromQ(q[t], g.scale);
-                          });
+    if (mode == Mode::Fast) {
+        // The lane search (maps/cone_search.h): one pass per stacked cone, else one.
+        const int passes = kind == ConeKind::Stacked ? C : 1;
+        ProgressCounter progress(
+            p.progress, int64_t(passes) * ((hf.height + kLaneTile - 1) / kLaneTile));
+        ConeSearchJob job;
+        job.field = &hf;
+        job.sectors = sectors;
+        job.limiting = limiting;
+        job.output = kind == ConeKind::ConeNormal ? ConeSearchOutput::ConeNormal
+                                                  : ConeSearchOutput::Ratio;
+        job.out = m.values.data();
+        job.outStride = C;
+        if (kind != ConeKind::Stacked) {
+            job.apex = hf.depth.data();
+            RunConeSearch(job, &progress);
+            return m;
+        }
+        std::vector<float> apex(hf.depth.size());
+        for (int c = 0; c < C; ++c) {
+            for (size_t t = 0; t < apex.size(); ++t)
+                apex[t] = StackedApex(hf.depth[t], c, C);
+            job.apex = apex.data();
+            job.outBase = c;
+            RunConeSearch(job, &progress);
+        }
         return m;
     }
 
@@ -132,9 +139,10 @@ ConeMap GenerateConeMapImpl(const DepthField& hf, ConeKind kind, const ConeMapPa
                             Mode mode) {
     ValidateConeMapParams(p);
     if (p.normal && kind != ConeKind::Stacked)
-        throw Error(
-            "--normal: applies to --kind stacked only (--kind cone-normal stores "
-            "n_z of one cone)");
+        throw Error(ParamName("normal") + ": applies to " + ParamName("kind") +
+                    " stacked only (" + ParamName("kind") +
+                    " cone-normal stores "
+                    "n_z of one cone)");
     switch (kind) {
         case ConeKind::Relaxed:
             return RelaxedListingMap(hf, p, mode == Mode::Brute, kind);
@@ -151,7 +159,7 @@ ConeMap GenerateConeMapImpl(const DepthField& hf, ConeKind kind, const ConeMapPa
         }
         case ConeKind::MinMip:
         case ConeKind::MaxMip:
-            throw Error("--kind " + std::string(ToString(kind)) +
+            throw Error(ParamName("kind") + " " + std::string(ToString(kind)) +
                         ": a mip pyramid, not a cone map; use BuildMipPyramid "
                         "(maps/mip_pyramid.h)");
         default:

@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include "core/error.h"
+#include "core/param_name.h"
 #include "maps/cone_map.h"
 #include "texture/image_io.h"
 
@@ -28,7 +29,7 @@ void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc,
                   OutputSet* outputs) {
     const std::string ext = Lower(std::filesystem::path(path).extension().string());
     if (ext != ".exr" && ext != ".png")
-        throw Error("--out \"" + path +
+        throw Error(ParamName("out") + " \"" + path +
                     "\": unsupported extension; expected .exr (float) or .png (8-bit)");
     // The image writers stage the file (in `outputs`, or on their own), so a failure
     // leaves nothing behind.
@@ -39,8 +40,8 @@ void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc,
         return;
     }
     if (m.channels > 4 && m.channels != 8)
-        throw Error("--out \"" + path + "\": " + std::to_string(m.channels) +
-                    " channels do not fit a PNG; use .exr");
+        throw Error(ParamName("out") + " \"" + path + "\": " +
+                    std::to_string(m.channels) + " channels do not fit a PNG; use .exr");
     const ConeEncoding e8 =
         enc == ConeEncoding::U8Sqrt ? ConeEncoding::U8Sqrt : ConeEncoding::U8;
     std::vector<uint16_t> codes;

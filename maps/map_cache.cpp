@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/output_set.h"
+#include "core/param_name.h"
 #include "texture/procedural.h"
 
 namespace reliefsim {
@@ -115,7 +116,7 @@ void MapCache::Store(uint64_t key, const ConeMap& m) const {
     wr(&sum, 8);
     // A missing cache folder is created; the entry appears complete or not at all.
     WriteFileAtomically(PathFor(key), std::string_view(bytes.data(), bytes.size()),
-                        "--cache-dir \"" + dir_ + "\"");
+                        ParamName("cache_dir") + " \"" + dir_ + "\"");
 }
 
 ConeMap MapCache::GetOrCreate(const DepthField& hf, ConeKind kind, const ConeMapParams& p,

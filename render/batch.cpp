@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "core/error.h"
+#include "core/param_name.h"
 #include "render/lane_driver.h"
 
 RS_DECLARE_LANE_WIDTH(W1)
@@ -71,11 +72,12 @@ const LaneWidthInfo& PickLaneWidth(int width) {
     for (const LaneWidthInfo& w : all) {
         if (w.width != width) continue;
         if (!w.supported)
-            throw Error("--lanes " + std::to_string(width) + ": this CPU lacks " + w.isa +
-                        "; valid here: 0 (the widest), " + valid);
+            throw Error(ParamName("lanes") + " " + std::to_string(width) +
+                        ": this CPU lacks " + w.isa + "; valid here: 0 (the widest), " +
+                        valid);
         return w;
     }
-    throw Error("--lanes " + std::to_string(width) +
+    throw Error(ParamName("lanes") + " " + std::to_string(width) +
                 ": not a lane width of this build; valid: 0 (the widest), " + valid);
 }
 
@@ -144,9 +146,9 @@ BatchJob MakeBatchJob(const Kernel& kernel, const Textures& textures,
         job.textures.padded = BindTextures(*textures.depth, textures.sampler).padded;
     const KernelInfo& info = kernel.Info();
     if (!info.maps.empty() && job.textures.cone.size() != size_t(info.mapLayers))
-        throw Error("--method " + std::string(info.name) + ": reads a cone map of " +
-                    std::to_string(info.mapLayers) + " layer(s) and " +
-                    std::to_string(job.textures.cone.size()) +
+        throw Error(ParamName("method") + " " + std::string(info.name) +
+                    ": reads a cone map of " + std::to_string(info.mapLayers) +
+                    " layer(s) and " + std::to_string(job.textures.cone.size()) +
                     " are bound (render/kernel_maps.h BindKernelTextures makes it)");
     RS_CHECK(job.textures.cone.empty() || job.textures.conePadded);
     return job;

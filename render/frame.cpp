@@ -12,6 +12,7 @@
 
 #include "core/error.h"
 #include "core/memory.h"
+#include "core/param_name.h"
 #include "metrics/exact.h"
 #include "raster/rasterizer.h"
 #include "render/batch.h"
@@ -27,9 +28,10 @@ uint64_t EstimateFrameBytes(int width, int height, uint64_t bytesPerPixel) {
 }
 
 void RequireFrameMemory(int width, int height, uint64_t bytesPerPixel) {
-    RequireMemory(EstimateFrameBytes(width, height, bytesPerPixel),
-                  "--size " + std::to_string(width) + "x" + std::to_string(height),
-                  "use a smaller --size");
+    RequireMemory(
+        EstimateFrameBytes(width, height, bytesPerPixel),
+        ParamName("size") + " " + std::to_string(width) + "x" + std::to_string(height),
+        "use a smaller " + ParamName("size"));
 }
 
 namespace {

@@ -2,11 +2,14 @@
 #include "render/kernel_maps.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <memory>
 
 #include "core/error.h"
+#include "core/param_name.h"
 #include "maps/map_cache.h"
 
 namespace reliefsim {
@@ -63,19 +66,23 @@ void ValidateKernelMaps(const Kernel& kernel, const SamplerState& sampler,
     if (kernel.Info().maps.empty()) return;
     const Filter coneFilter = KernelConeFilter(kernel, sampler.filter);
     if (sampler.precision == Precision::Llvmpipe8 && coneFilter != sampler.filter)
-        throw Error("--set cone_filter=" + std::string(kFilterNames.Name(coneFilter)) +
-                    ": with an 8-bit height texture (--texture-format r8) the cone map "
-                    "is sampled as the height (--filter " +
-                    std::string(kFilterNames.Name(sampler.filter)) +
+        throw Error(ParamName("set") +
+                    " cone_filter=" + std::string(kFilterNames.Name(coneFilter)) +
+                    ": with an 8-bit height texture (" + ParamName("texture_format") +
+                    " r8) the cone map is sampled as the height (" + ParamName("filter") +
+                    " " + std::string(kFilterNames.Name(sampler.filter)) +
                     "; llvmpipe's 8-bit path is modelled for one filter per texture); "
-                    "use --texture-format r32f or cone_filter=auto");
+                    "use " +
+                    ParamName("texture_format") + " r32f or cone_filter=auto");
     const ConeEncoding e = KernelMapEncoding(kernel, maps);
     const bool eightBit = e == ConeEncoding::U8 || e == ConeEncoding::U8Sqrt;
     if (sampler.precision == Precision::Llvmpipe8 && !eightBit)
-        throw Error(std::string(maps.coneMap.empty() ? "--cone-encoding "
-                                                     : "--cone-map-encoding ") +
-                    std::string(ToString(e)) +
-                    ": an 8-bit height texture (--texture-format r8) holds the cone "
+        throw Error(std::string(maps.coneMap.empty()
+                                    ? ParamName("cone_encoding") + " "
+                                    : ParamName("cone_map_encoding") + " ") +
+                    std::string(ToString(e)) + ": an 8-bit height texture (" +
+                    ParamName("texture_format") +
+                    " r8) holds the cone "
                     "ratio in 8 bits too; use u8 or u8sqrt");
 }
 
@@ -110,7 +117,9 @@ StoredMap GeneratedMap(const DepthField& field, ConeKind kind,
     ConeMap map;
     bool hit = false;
     const std::string dir = maps.cacheDir.empty() ? DefaultMapCacheDir() : maps.cacheDir;
-    if (maps.useCache && !dir.empty()) {
+    if (maps.generator) {
+        map = maps.generator(field, kind, params);
+    } else if (maps.useCache && !dir.empty()) {
         try {
             map = MapCache(dir).GetOrCreate(
                 field, kind, params, [&] { return GenerateConeMap(field, kind, params); },
@@ -150,7 +159,7 @@ StoredMap GeneratedMap(const DepthField& field, ConeKind kind,
 
 StoredMap ExternalMap(const DepthField& field, ConeKind kind, ConeEncoding enc,
                       const KernelMapSettings& maps) {
-    const std::string subject = "--cone-map \"" + maps.coneMap + "\"";
+    const std::string subject = ParamName("cone_map") + " \"" + maps.coneMap + "\"";
     const int need = ChannelCount(kind);
     if (need != 1 && need != 4)
         throw Error(subject + ": this method reads a " + std::to_string(need) +
@@ -158,7 +167,7 @@ StoredMap ExternalMap(const DepthField& field, ConeKind kind, ConeEncoding enc,
                     "); external maps of 1 or 4 channels only");
     ConeMap map = LoadExternalConeMap(maps.coneMap, kind,
                                       need == 4 ? -1 : std::max(maps.coneMapChannel, 0),
-                                      field.width, field.height, "--cone-map");
+                                      field.width, field.height, ParamName("cone_map"));
     RS_CHECK(map.channels == need);
     StoredMap m;
     m.channels = map.channels;
@@ -173,7 +182,7 @@ StoredMap ExternalMap(const DepthField& field, ConeKind kind, ConeEncoding enc,
                     subject + ": texel (" +
                     std::to_string(i / size_t(need) % size_t(field.width)) + ", " +
                     std::to_string(i / size_t(need) / size_t(field.width)) +
-                    ") is not an 8-bit code; --cone-map-encoding " +
+                    ") is not an 8-bit code; " + ParamName("cone_map_encoding") + " " +
                     std::string(ToString(enc)) + " needs an 8-bit map (or use float)");
             m.codes8[i] = uint8_t(c);
         }
@@ -223,6 +232,26 @@ std::vector<DepthField> KernelConeLayers(const DepthField& field, const Kernel& 
     }
     RS_CHECK(int(layers.size()) == kernel.Info().mapLayers);
     return layers;
+}
+
+std::function<ConeMap(const DepthField&, ConeKind, const ConeMapParams&)>
+AdaptiveMapGenerator(float threshold, int levels, double* millis) {
+    struct State {
+        AdaptiveWorkspace workspace;
+        ConeMap map;
+    };
+    auto state = std::make_shared<State>();
+    return [state, threshold, levels, millis](const DepthField& field, ConeKind kind,
+                                              const ConeMapParams&) {
+        const auto t0 = std::chrono::steady_clock::now();
+        GenerateAdaptiveSectorMap(field, kind, threshold, levels, state->workspace,
+                                  state->map);
+        if (millis)
+            *millis = std::chrono::duration<double, std::milli>(
+                          std::chrono::steady_clock::now() - t0)
+                          .count();
+        return state->map;
+    };
 }
 
 Textures BindKernelTextures(const DepthField& field, const SamplerState& sampler,

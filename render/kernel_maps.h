@@ -4,6 +4,7 @@
 // cache (maps/map_cache.h) keyed by the field's texels and the map's parameters.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,7 +26,20 @@ struct KernelMapSettings {
     /// --cone-map-channel for one-ratio kernels: 0..3 = R, G, B, A; -1 (unset): R.
     /// Directional kernels read all four (RGBA, as maps --kind quad|acm4 writes them).
     int coneMapChannel = -1;
+    /// When set, makes the kernel's map (float ratios, the kind's channels) instead of
+    /// GenerateConeMap and the cache: `render --animate` preprocesses every frame's map
+    /// with adaptive ACM this way. The map is then encoded like a generated one.
+    std::function<ConeMap(const DepthField& field, ConeKind kind,
+                          const ConeMapParams& params)>
+        generator;
 };
+
+/// A KernelMapSettings::generator that makes a cone, quad, acm4 or acm8 map with
+/// adaptive ACM (000 Algorithm 1, GenerateAdaptiveSectorMap) into buffers kept across
+/// calls, as a renderer preprocessing a dynamic map every frame would (`render
+/// --animate`); *millis, when given, receives each call's time in milliseconds.
+std::function<ConeMap(const DepthField&, ConeKind, const ConeMapParams&)>
+AdaptiveMapGenerator(float threshold, int levels, double* millis = nullptr);
 
 /// A map as a kernel names it (KernelInfo::maps): a `maps --kind` name, optionally with
 /// the flags " --relaxed" (relaxed cones) and " --normal" (stacked cones as n_z), as

@@ -9,6 +9,7 @@
 
 #include "core/error.h"
 #include "core/output_set.h"
+#include "core/param_name.h"
 #include "metrics/heatmap.h"
 #include "metrics/lane_groups.h"
 #include "raster/viewport_pieces.h"
@@ -151,16 +152,17 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
 void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
                         const RenderSettings& s, const DepthField& field,
                         bool allLaneGroups) {
-    if (outDir.empty()) throw Error("--out: empty; give a directory");
+    if (outDir.empty()) throw Error(ParamName("out") + ": empty; give a directory");
     const fs::path dir(outDir);
     std::error_code ec;
     if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
-        throw Error("--out \"" + outDir + "\": exists and is not a directory");
+        throw Error(ParamName("out") + " \"" + outDir +
+                    "\": exists and is not a directory");
     // All five files are staged as temporaries beside their destinations (or in the
     // nearest existing ancestor while the folder does not exist) and replace what was
     // there only once every one is complete, all or nothing (core/output_set.h). Every
     // destination is checked before anything is written.
-    OutputSet outputs("--out \"" + outDir + "\"");
+    OutputSet outputs(ParamName("out") + " \"" + outDir + "\"");
     auto dest = [&](const char* name) { return (dir / name).string(); };
     for (const char* name : {"color.png", "iterations.png", "fetches.png", "record.exr",
                              "metrics.json", "warp_trips.png", "warp_utilisation.png"})

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "core/error.h"
+#include "core/param_name.h"
 #include "render/batch.h"
 
 namespace reliefsim {
@@ -18,84 +19,93 @@ void ValidateSettings(const RenderSettings& s) {
         return std::string(buf);
     };
     if (s.width < 1 || s.height < 1 || s.width > 16384 || s.height > 16384)
-        bad("--size " + std::to_string(s.width) + "x" + std::to_string(s.height) +
-            ": each side must be in [1, 16384]");
+        bad(ParamName("size") + " " + std::to_string(s.width) + "x" +
+            std::to_string(s.height) + ": each side must be in [1, 16384]");
     if (!(s.viewAngle >= 0.0f && s.viewAngle < 90.0f))
-        bad("--view-angle " + num(s.viewAngle) + ": must be in [0, 90) degrees");
+        bad(ParamName("view_angle") + " " + num(s.viewAngle) +
+            ": must be in [0, 90) degrees");
     if (!(std::fabs(s.azimuth) <= 1e6f))
-        bad("--azimuth " + num(s.azimuth) +
+        bad(ParamName("azimuth") + " " + num(s.azimuth) +
             ": must be a finite angle in [-1e6, 1e6] degrees");
     if (!(s.depthScale > 0.0f && s.depthScale <= kMaxDepthScale))
-        bad("--depth-scale " + num(s.depthScale) + ": must be in (0, " +
+        bad(ParamName("depth_scale") + " " + num(s.depthScale) + ": must be in (0, " +
             num(kMaxDepthScale) + "] plane widths");
     if (!(s.tiling > 0.0f && s.tiling <= kMaxTiling))
-        bad("--tiling " + num(s.tiling) + ": must be in (0, " + num(kMaxTiling) + "]");
+        bad(ParamName("tiling") + " " + num(s.tiling) + ": must be in (0, " +
+            num(kMaxTiling) + "]");
     if (!(s.distance >= kMinDistance && s.distance <= kMaxDistance))
-        bad("--distance " + num(s.distance) + ": must be in [" + num(kMinDistance) +
-            ", " + num(kMaxDistance) + "] plane widths");
+        bad(ParamName("distance") + " " + num(s.distance) + ": must be in [" +
+            num(kMinDistance) + ", " + num(kMaxDistance) + "] plane widths");
     if (!(s.fovY > 0.0f && s.fovY < 180.0f))
-        bad("--fov " + num(s.fovY) + ": must be in (0, 180) degrees");
+        bad(ParamName("fov") + " " + num(s.fovY) + ": must be in (0, 180) degrees");
     if (s.threads < 0 || s.threads > kMaxThreads)
-        bad("--threads " + std::to_string(s.threads) + ": must be in [0, " +
+        bad(ParamName("threads") + " " + std::to_string(s.threads) + ": must be in [0, " +
             std::to_string(kMaxThreads) + "]");
     if (!std::isfinite(s.iterScaleMin) || !std::isfinite(s.iterScaleMax) ||
         !(s.iterScaleMax > s.iterScaleMin))
-        bad("--iterations-scale: MIN and MAX must be finite with MAX > MIN");
+        bad(ParamName("iterations_scale") +
+            ": MIN and MAX must be finite with MAX > MIN");
     if (!std::isfinite(s.fetchScaleMin) || !std::isfinite(s.fetchScaleMax) ||
         !(s.fetchScaleMax > s.fetchScaleMin))
-        bad("--fetches-scale: MIN and MAX must be finite with MAX > MIN");
+        bad(ParamName("fetches_scale") + ": MIN and MAX must be finite with MAX > MIN");
     if (s.shadowSteps < 1 || s.shadowSteps > kMaxShadowSteps)
-        bad("--shadow-steps " + std::to_string(s.shadowSteps) + ": must be in [1, " +
-            std::to_string(kMaxShadowSteps) + "]");
+        bad(ParamName("shadow_steps") + " " + std::to_string(s.shadowSteps) +
+            ": must be in [1, " + std::to_string(kMaxShadowSteps) + "]");
     if (!(s.shadowSoftening >= 0.0f && s.shadowSoftening <= kMaxShadowSoftening))
-        bad("--shadow-softening " + num(s.shadowSoftening) + ": must be in [0, " +
-            num(kMaxShadowSoftening) + "]");
+        bad(ParamName("shadow_softening") + " " + num(s.shadowSoftening) +
+            ": must be in [0, " + num(kMaxShadowSoftening) + "]");
     if (!(s.shadowPenumbra >= 0.0f && s.shadowPenumbra <= kMaxShadowPenumbra))
-        bad("--shadow-penumbra " + num(s.shadowPenumbra) + ": must be in [0, " +
-            num(kMaxShadowPenumbra) + "]");
+        bad(ParamName("shadow_penumbra") + " " + num(s.shadowPenumbra) +
+            ": must be in [0, " + num(kMaxShadowPenumbra) + "]");
     if (s.shadow == ShadowKind::Cone) {
         // The cone-normal soft shadow reads the cone normal of cns's map (004 §4.4).
         const auto maps = FindMethod(s.method).maps;
         if (maps.size() != 1 || maps[0] != "cone-normal")
-            bad("--shadow cone: reads the cone-normal map of method cns (dissertation "
-                "§4.4); --method " +
-                s.method + " binds " +
+            bad(ParamName("shadow") +
+                " cone: reads the cone-normal map of method cns (dissertation "
+                "§4.4); " +
+                ParamName("method") + " " + s.method + " binds " +
                 (maps.empty() ? std::string("no derived map")
                               : "the \"" + std::string(maps[0]) + "\" map") +
-                "; use --method cns, or --shadow hard|soft");
+                "; use " + ParamName("method") + " cns, or " + ParamName("shadow") +
+                " hard|soft");
     }
     if (s.camera == CameraKind::Ortho) {
         const glm::vec3 d = s.viewDir;
         const std::string text = num(d.x) + "," + num(d.y) + "," + num(d.z);
         if (!(std::isfinite(d.x) && std::isfinite(d.y) && std::isfinite(d.z)))
-            bad("--view-dir " + text + ": must be finite");
+            bad(ParamName("view_dir") + " " + text + ": must be finite");
         if (!(d.z < 0.0f))
-            bad("--view-dir " + text +
+            bad(ParamName("view_dir") + " " + text +
                 ": Z must be < 0 (the direction from the eye towards the surface)");
         if (!(std::hypot(double(d.x), double(d.y)) <= 1000.0 * -double(d.z)))
-            bad("--view-dir " + text +
+            bad(ParamName("view_dir") + " " + text +
                 ": within 89.94 degrees of the normal (|XY| <= 1000 |Z|)");
         if (s.tiling != 1.0f)
-            bad("--tiling " + num(s.tiling) +
-                ": the ortho camera frames exactly one tile; leave --tiling at 1");
+            bad(ParamName("tiling") + " " + num(s.tiling) +
+                ": the ortho camera frames exactly one tile; leave " +
+                ParamName("tiling") + " at 1");
     }
     {
         const glm::vec3 l = s.lightDir;
         const std::string text = num(l.x) + "," + num(l.y) + "," + num(l.z);
         if (!(std::isfinite(l.x) && std::isfinite(l.y) && std::isfinite(l.z)))
-            bad("--light-dir " + text + ": must be finite");
+            bad(ParamName("light_dir") + " " + text + ": must be finite");
         if (!(l.z > 0.0f))
-            bad("--light-dir " + text +
+            bad(ParamName("light_dir") + " " + text +
                 ": Z must be > 0 (the light is above the surface)");
         if (!(std::hypot(double(l.x), double(l.y)) <= 1e6 * double(l.z)))
-            bad("--light-dir " + text + ": |XY| must be <= 1e6 Z");
+            bad(ParamName("light_dir") + " " + text + ": |XY| must be <= 1e6 Z");
     }
     if (s.method == kExactMethod) {
         if (!s.set.empty())
-            bad("--set " + s.set.front() + ": method exact takes no parameters");
+            bad(ParamName("set") + " " + s.set.front() +
+                ": method exact takes no parameters");
         if (s.sampler.filter != Filter::Bilinear)
-            bad("--filter " + std::string(kFilterNames.Name(s.sampler.filter)) +
-                ": method exact intersects the bilinear surface; use --filter bilinear");
+            bad(ParamName("filter") + " " +
+                std::string(kFilterNames.Name(s.sampler.filter)) +
+                ": method exact intersects the bilinear surface; use " +
+                ParamName("filter") + " bilinear");
     } else {
         const KernelInfo& info = FindMethod(s.method);
         const Kernel kernel = MakeKernel(info, ResolveParams(info, s.set));
@@ -103,17 +113,18 @@ void ValidateSettings(const RenderSettings& s) {
     }
     if (!s.maps.coneMap.empty()) {
         if (s.method == kExactMethod || FindMethod(s.method).maps.empty())
-            bad("--cone-map: method " + s.method + " reads no cone map");
+            bad(ParamName("cone_map") + ": method " + s.method + " reads no cone map");
         const KernelInfo& info = FindMethod(s.method);
         const auto spec = ParseKernelMap(info.maps[0]);
         if (spec && ChannelCount(spec->kind) != 1 && s.maps.coneMapChannel >= 0)
-            bad("--cone-map-channel: method " + s.method + " reads all four channels (" +
-                std::string(info.maps[0]) + " map: RGBA)");
+            bad(ParamName("cone_map_channel") + ": method " + s.method +
+                " reads all four channels (" + std::string(info.maps[0]) + " map: RGBA)");
     }
-    if (s.maps.coneMapChannel > 3) bad("--cone-map-channel: must be R, G, B or A");
+    if (s.maps.coneMapChannel > 3)
+        bad(ParamName("cone_map_channel") + ": must be R, G, B or A");
     if (s.maps.encoding &&
         (s.method == kExactMethod || FindMethod(s.method).maps.empty()))
-        bad("--cone-encoding: method " + s.method + " reads no cone map");
+        bad(ParamName("cone_encoding") + ": method " + s.method + " reads no cone map");
     PickLaneWidth(s.lanes);
 }
 

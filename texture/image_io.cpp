@@ -22,6 +22,7 @@
 #include "core/error.h"
 #include "core/memory.h"
 #include "core/output_set.h"
+#include "core/param_name.h"
 #include "texture/procedural.h"
 
 namespace reliefsim {
@@ -332,11 +333,12 @@ DepthField LoadHeightMapFile(const std::string& path, const MapLoadOptions& opti
         }
         if (c < 0)
             throw Error(subject + ": has " + std::to_string(nc) +
-                        " channels and no alpha; pick one with --map-channel R|G|B");
+                        " channels and no alpha; pick one with " +
+                        ParamName("map_channel") + " R|G|B");
         if (c >= nc)
-            throw Error(subject + ": --map-channel asks for channel " + "RGBA"[c] +
-                        " but the image has " + std::to_string(nc) + " channel" +
-                        (nc == 1 ? "" : "s"));
+            throw Error(subject + ": " + ParamName("map_channel") + " asks for channel " +
+                        "RGBA"[c] + " but the image has " + std::to_string(nc) +
+                        " channel" + (nc == 1 ? "" : "s"));
         return {c, c + 1};
     };
     ImageData img = ReadImageFile(path, subject, pick, /*keep8=*/true);
@@ -380,7 +382,8 @@ DepthField LoadHeightMapFile(const std::string& path, const MapLoadOptions& opti
 
 DepthField LoadHeightMap(const std::string& spec, const MapLoadOptions& options) {
     if (spec.rfind("builtin:", 0) == 0) return MakeBuiltinMap(spec);
-    if (spec.empty()) throw Error("--map: empty; give a file or builtin:NAME[:SIZE]");
+    if (spec.empty())
+        throw Error(ParamName("map") + ": empty; give a file or builtin:NAME[:SIZE]");
     return LoadHeightMapFile(spec, options);
 }
 

@@ -8,6 +8,7 @@
 #include <functional>
 
 #include "core/error.h"
+#include "core/param_name.h"
 #include "core/parse.h"
 
 namespace reliefsim {
@@ -129,10 +130,10 @@ DepthField MakeBuiltinMap(std::string_view name, int width, int height) {
     auto it = std::find_if(Builtins().begin(), Builtins().end(),
                            [&](const Builtin& b) { return name == b.name; });
     if (it == Builtins().end())
-        throw Error("--map builtin:" + std::string(name) +
+        throw Error(ParamName("map") + " builtin:" + std::string(name) +
                     ": unknown; must be one of: " + NameList());
     if (width < 1 || height < 1 || width > 16384 || height > 16384)
-        throw Error("--map builtin:" + std::string(name) + ": size " +
+        throw Error(ParamName("map") + " builtin:" + std::string(name) + ": size " +
                     std::to_string(width) + "x" + std::to_string(height) +
                     " is outside [1, 16384]");
     DepthField hf;
@@ -157,8 +158,8 @@ DepthField MakeBuiltinMap(std::string_view spec) {
     if (auto colon = rest.find(':'); colon != std::string_view::npos) {
         name = rest.substr(0, colon);
         std::string_view num = rest.substr(colon + 1);
-        size =
-            int(ParseIntInRange(num, 1, 16384, "--map " + std::string(spec) + ": size"));
+        size = int(ParseIntInRange(
+            num, 1, 16384, ParamName("map") + " " + std::string(spec) + ": size"));
     }
     return MakeBuiltinMap(name, size, size);
 }

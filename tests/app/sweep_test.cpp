@@ -84,7 +84,7 @@ TEST(Sweep, NamedParameterValuesCrossAsNames) {
     EXPECT_EQ(lit[0].settings.lightDir.z, 1.0f);
     ExpectConfigError(R"({"maps": ["builtin:shapes:32"],
       "views": [{"light_dir": [1, 0, -1]}], "methods": [{"method": "relief"}]})",
-                      "--light-dir");
+                      "light_dir");
     // A name the parameter does not have is the configuration's error, with the choices.
     ExpectConfigError(R"({"maps": ["builtin:shapes:32"],
       "methods": [{"method": "csm", "set": {"refine": ["bisect"]}}]})",
@@ -131,7 +131,7 @@ TEST(Sweep, BadConfigurationsNameTheCulprit) {
         "empty list");
     ExpectConfigError(
         R"({"maps": ["builtin:shapes"], "views": [{"view_angle": 95}], "methods": [{"method": "relief"}]})",
-        "--view-angle 95");
+        "view_angle 95");
     ExpectConfigError(
         R"({"maps": ["builtin:shapes"], "views": [{"filter": "bicubic"}], "methods": [{"method": "relief"}]})",
         "\"bicubic\" is unknown");
@@ -146,7 +146,7 @@ TEST(Sweep, BadConfigurationsNameTheCulprit) {
         "\"Q\" is unknown");
     ExpectConfigError(
         R"({"size": "0x3", "maps": ["builtin:shapes"], "methods": [{"method": "relief"}]})",
-        "--size");
+        "size");
 }
 
 TEST(Sweep, RefusesHugeCrossProductsAndOutOfRangeIntegers) {

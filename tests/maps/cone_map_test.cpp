@@ -6,6 +6,7 @@
 #include <tbb/global_control.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +14,7 @@
 
 #include "core/error.h"
 #include "maps/cone_map_detail.h"
+#include "maps/cone_search.h"
 #include "maps/map_cache.h"
 #include "maps/mip_pyramid.h"
 #include "texture/image_io.h"
@@ -108,18 +110,49 @@ TEST(ConeMap, NonSquareAndOddSizesMatchBruteForce) {
     }
 }
 
-TEST(ConeMap, LevelsPathOnWideRowsMatchesPlainSearch) {
-    // Rows of several 64-texel segments (the levels path builds the row envelope only
-    // around segments with texels left to improve): equal to the exact plain search,
-    // which the brute-force tests cover. Non-square sizes exercise the weighted geometry
-    // and wrap.
-    for (auto [w, h] : {std::pair{512, 40}, std::pair{300, 64}, std::pair{256, 256}}) {
+TEST(ConeMap, LaneSearchOnLargeAndWideMapsMatchesPlainSearch) {
+    // Sizes beyond the brute force's reach, with rows and columns that are not multiples
+    // of the lane tile, several pyramid levels and wrap images: equal to the exact plain
+    // search, which the brute-force tests cover. Non-square sizes exercise the weighted
+    // geometry (and acm8 on non-square maps, which has no sheared rip-maps).
+    for (auto [w, h] : {std::pair{301, 38}, std::pair{97, 130}, std::pair{192, 192}}) {
         for (const DepthField& hf : {QuantizeToUnorm8(MakeBuiltinMap("shapes", w, h)),
-                                     QuantizeToUnorm8(RandomField(w, h, 13, true))})
-            ExpectBitEqual(GenerateConeMap(hf, ConeKind::Cone),
-                           GenerateSectorMapPlainSearch(hf, ConeKind::Cone),
-                           hf.name + " " + std::to_string(w) + "x" + std::to_string(h));
+                                     RandomField(w, h, 13, true)})
+            for (ConeKind k :
+                 {ConeKind::Cone, ConeKind::Quad, ConeKind::Acm4, ConeKind::Acm8})
+                ExpectBitEqual(GenerateConeMap(hf, k),
+                               GenerateSectorMapPlainSearch(hf, k),
+                               hf.name + " " + std::to_string(w) + "x" +
+                                   std::to_string(h) + " " + std::string(ToString(k)));
     }
+}
+
+TEST(ConeMap, LaneSearchIsTheSameOnEveryInstructionSet) {
+    // The lane search runs with AVX-512, AVX2 or SSE4.1 (RS_CONE_SEARCH_ISA forces one of
+    // those the CPU has); every one gives the same map bit for bit.
+    const char* old = std::getenv("RS_CONE_SEARCH_ISA");
+    const std::string saved = old ? old : "";
+    const std::vector<DepthField> fields = {
+        RandomField(70, 53, 5, false),
+        QuantizeToUnorm8(MakeBuiltinMap("shapes", 96, 96))};
+    for (const DepthField& hf : fields)
+        for (ConeKind k : {ConeKind::Cone, ConeKind::Quad, ConeKind::Acm4, ConeKind::Acm8,
+                           ConeKind::RelaxedExact, ConeKind::Stacked}) {
+            setenv("RS_CONE_SEARCH_ISA", "sse4.1", 1);
+            ASSERT_STREQ(detail::ConeSearchIsa(), "sse4.1");
+            const ConeMap ref = GenerateConeMap(hf, k);
+            for (const char* isa : {"avx2", "avx512"}) {
+                setenv("RS_CONE_SEARCH_ISA", isa, 1);
+                if (std::string(detail::ConeSearchIsa()) != isa)
+                    continue;  // CPU lacks it
+                ExpectBitEqual(GenerateConeMap(hf, k), ref,
+                               hf.name + " " + std::string(ToString(k)) + " " + isa);
+            }
+        }
+    if (old)
+        setenv("RS_CONE_SEARCH_ISA", saved.c_str(), 1);
+    else
+        unsetenv("RS_CONE_SEARCH_ISA");
 }
 
 TEST(ConeMap, RelaxedFastEqualsListingBruteForce) {

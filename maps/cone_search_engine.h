@@ -1,0 +1,557 @@
+// The lane search's engine, compiled once per instruction set (cone_search_*.cpp): a
+// 4x4 tile of apexes is 16 vector lanes (GCC vector extensions, lowered to one AVX-512,
+// two AVX2 or four SSE registers), and one depth-first traversal of the min-depth
+// pyramid (or, for acm4 and acm8, of rip-maps) serves them all. See maps/cone_search.h.
+#pragma once
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "maps/cone_search_lanes.h"
+
+#if defined(__SSE4_1__)
+#include <immintrin.h>
+#endif
+
+namespace reliefsim::detail {
+
+// Internal linkage: every unit compiles its own copy for its instruction set, and none
+// may stand in for another's at link time (so -Wpsabi's warning about 64-byte vectors
+// passed by value below AVX-512 does not apply; maps/CMakeLists.txt turns it off).
+namespace lanes {
+namespace {
+
+constexpr int kLanes = kLaneTile * kLaneTile;
+typedef int32_t VI __attribute__((vector_size(4 * kLanes)));
+typedef float VF __attribute__((vector_size(4 * kLanes)));
+
+/// Bit k set where lane k of a comparison result (0 or -1) is set.
+RS_INLINE uint32_t Bits(const VI& m) {
+#if defined(__AVX512DQ__)
+    __m512i v;
+    static_assert(sizeof(v) == sizeof(m));
+    __builtin_memcpy(&v, &m, sizeof(v));
+    return _mm512_movepi32_mask(v);
+#elif defined(__AVX2__)
+    __m256 h[2];
+    __builtin_memcpy(h, &m, sizeof(h));
+    return uint32_t(_mm256_movemask_ps(h[0])) | uint32_t(_mm256_movemask_ps(h[1])) << 8;
+#elif defined(__SSE4_1__)
+    __m128 q[4];
+    __builtin_memcpy(q, &m, sizeof(q));
+    return uint32_t(_mm_movemask_ps(q[0])) | uint32_t(_mm_movemask_ps(q[1])) << 4 |
+           uint32_t(_mm_movemask_ps(q[2])) << 8 | uint32_t(_mm_movemask_ps(q[3])) << 12;
+#else
+    uint32_t b = 0;
+    for (int k = 0; k < kLanes; ++k) b |= uint32_t(m[k] != 0) << k;
+    return b;
+#endif
+}
+
+RS_INLINE VI Max(const VI& a, const VI& b) { return a > b ? a : b; }
+RS_INLINE VI Min(const VI& a, const VI& b) { return a < b ? a : b; }
+RS_INLINE VF Max(const VF& a, const VF& b) { return a > b ? a : b; }
+RS_INLINE VF ToFloat(const VI& v) { return __builtin_convertvector(v, VF); }
+
+/// A float test passes every candidate whose exact q (CandidateQ, double) is below a
+/// lane's best: thresholds are float(best) * (1 + 2^-16), far above the float rounding
+/// of the test (a few 2^-24); depth differences below kTiny (whose squares could lose
+/// precision) always pass. docs/cone_maps.md, "The lane search".
+constexpr float kThresholdScale = 1.0f + 0x1p-16f;
+constexpr float kTiny = 0x1p-40f;
+
+struct Node {
+    int8_t level, tx, ty;  ///< pyramid level; wrap image (-1, 0, 1) in x and y
+    uint16_t lanes;        ///< lanes still searching here
+    int32_t cx, cy;        ///< cell at the level
+};
+
+/// A 4x4 tile of apexes and their running minima.
+struct Tile {
+    VI pi, pj;  ///< apex texel per lane
+    VF a;       ///< apex depth per lane
+    VF thr[kMaxSectors];
+    double best[kMaxSectors][kLanes];
+    int32_t argX[kMaxSectors][kLanes], argY[kMaxSectors][kLanes];  ///< unwrapped
+    uint32_t valid = 0;  ///< lanes with an apex that can have blockers
+    int x0 = 0, y0 = 0;
+};
+
+class Engine {
+  public:
+    explicit Engine(const ConeSearchData& d)
+        : d_(d), g_(d.g), wx_(float(d.g.wx)), wy_(float(d.g.wy)) {}
+
+    /// Searches every tile of tile rows [r0, r1).
+    void Band(int r0, int r1) {
+        const int tilesX = (d_.W + kLaneTile - 1) / kLaneTile;
+        seedUp_.assign(size_t(tilesX) * kLaneTile * size_t(d_.nChannels), {kNoSeed, 0});
+        for (int r = r0; r < r1; ++r) {
+            bool haveLeft = false;
+            for (int t = 0; t < tilesX; ++t) {
+                Tile& tile = tile_;
+                Begin(tile, t * kLaneTile, r * kLaneTile);
+                SeedFromNeighbours(tile, t, haveLeft, r > r0);
+                if (tile.valid) {
+                    if (d_.rips.empty())
+                        Traverse(tile);
+                    else
+                        for (const auto& rip : d_.rips) TraverseRip(tile, rip);
+                }
+                Finish(tile, t);
+                haveLeft = true;
+            }
+            if (d_.progress) d_.progress->Add(1);
+        }
+    }
+
+  private:
+    static constexpr int32_t kNoSeed = INT32_MIN;
+    struct Seed {
+        int32_t x, y;
+    };
+
+    void Begin(Tile& t, int x0, int y0) {
+        t.x0 = x0;
+        t.y0 = y0;
+        t.valid = 0;
+        for (int k = 0; k < kLanes; ++k) {
+            const int i = x0 + k % kLaneTile, j = y0 + k / kLaneTile;
+            const bool in = i < d_.W && j < d_.H;
+            t.pi[k] = in ? i : x0;
+            t.pj[k] = in ? j : y0;
+            const float a = in ? d_.apex[size_t(j) * size_t(d_.W) + size_t(i)] : 0.0f;
+            t.a[k] = a;
+            if (in && a > d_.dmin) t.valid |= 1u << k;
+        }
+        for (int c = 0; c < d_.nChannels; ++c) {
+            for (int k = 0; k < kLanes; ++k) {
+                t.thr[c][k] = INFINITY;
+                t.best[c][k] = kInfQ;
+                t.argX[c][k] = kNoSeed;
+            }
+        }
+    }
+
+    float DepthAt(int X, int Y) const {
+        return d_.field
+            ->depth[size_t(Wrap(Y, d_.H)) * size_t(d_.W) + size_t(Wrap(X, d_.W))];
+    }
+    uint8_t FlagsAt(int X, int Y) const {
+        return d_.flags[size_t(Wrap(Y, d_.H)) * size_t(d_.W) + size_t(Wrap(X, d_.W))];
+    }
+
+    /// Lanes for which a texel with limiting flags `flags` is limiting in the direction
+    /// class of the offset (dx, dy) (IsLimiting).
+    VI LimitingLanes(const VI& dx, const VI& dy, uint8_t flags) const {
+        const VI ax = Max(dx, -dx), ay = Max(dy, -dy);
+        const VI m = Max(ax, ay);
+        // (comparisons give -1 for true)
+        const VI sgx = (dx < 0) - (dx > 0), sgy = (dy < 0) - (dy > 0);
+        const VI sx = (2 * ax >= m) & sgx, sy = (2 * ay >= m) & sgy;
+        const VI i9 = (sy + 1) * 3 + (sx + 1);
+        const VI bit = i9 + (i9 > 4);
+        return ((VI{} + int32_t(flags)) >> bit & 1) != 0;
+    }
+
+    /// Per channel, the lanes whose offset (dx, dy) lies in its sector (SectorMask).
+    void Members(const VI& dx, const VI& dy, VI* member) const {
+        switch (d_.sectors) {
+            case ConeKind::Cone:
+                member[0] = VI{} - 1;
+                break;
+            case ConeKind::Quad:
+                member[0] = dx > 0;
+                member[1] = dx < 0;
+                member[2] = dy > 0;
+                member[3] = dy < 0;
+                break;
+            case ConeKind::Acm4:
+                member[0] = (dx >= 0) & (dy >= 0);
+                member[1] = (dx <= 0) & (dy >= 0);
+                member[2] = (dx <= 0) & (dy <= 0);
+                member[3] = (dx >= 0) & (dy <= 0);
+                break;
+            default: {  // Acm8: closed 45-degree sectors in uv space
+                const VI vx = dx * g_.h, vy = dy * g_.w;
+                member[0] = (vy >= 0) & (vx >= vy);
+                member[1] = (vx >= 0) & (vy >= vx);
+                member[2] = (vx <= 0) & (vy >= -vx);
+                member[3] = (vy >= 0) & (-vx >= vy);
+                member[4] = (vy <= 0) & (-vx >= -vy);
+                member[5] = (vx <= 0) & (-vy >= -vx);
+                member[6] = (vx >= 0) & (-vy >= vx);
+                member[7] = (vy <= 0) & (vx >= -vy);
+                break;
+            }
+        }
+    }
+
+    /// Lanes whose window holds the texel at unwrapped (X, Y) of depth b and for which
+    /// it can lower a channel's minimum (a superset: Exact decides).
+    uint32_t TexelLanes(const Tile& t, int X, int Y, float b, uint8_t flags) const {
+        const VI dx = X - t.pi, dy = Y - t.pj;
+        const VI inWindow = (dx >= -g_.halfX) & (dx <= g_.halfX) & (dy >= -g_.halfY) &
+                            (dy <= g_.halfY) & (t.a > b);
+        if (!Bits(inWindow)) return 0;
+        const VF fx = ToFloat(dx), fy = ToFloat(dy);
+        const VF s = fx * fx * wx_ + fy * fy * wy_;
+        const VF dd = t.a - b;
+        const VF d2 = dd * dd;
+        const VI tiny = dd < kTiny;
+        VI base = inWindow;
+        if (d_.limiting) base &= LimitingLanes(dx, dy, flags);
+        VI member[kMaxSectors];
+        Members(dx, dy, member);
+        VI any{};
+        for (int c = 0; c < d_.nChannels; ++c)
+            any |= member[c] & (tiny | ~(s >= t.thr[c] * d2));
+        return Bits(base & any);
+    }
+
+    /// The exact candidate of the texel at unwrapped (X, Y) for lane k.
+    void Exact(Tile& t, int k, int X, int Y, float b) {
+        const int dx = X - t.pi[k], dy = Y - t.pj[k];
+        const float a = t.a[k];
+        if (!(b < a) || dx < -g_.halfX || dx > g_.halfX || dy < -g_.halfY ||
+            dy > g_.halfY || (dx == 0 && dy == 0))
+            return;
+        if (d_.limiting) {
+            int sx, sy;
+            OffsetClass(dx, dy, sx, sy);
+            if (!(FlagsAt(X, Y) >> ClassBit(sx, sy) & 1u)) return;
+        }
+        const double q = CandidateQ(g_.S(dx, dy), a, b);
+        unsigned mask =
+            d_.sectors == ConeKind::Cone ? 1u : SectorMask(d_.sectors, g_, dx, dy);
+        for (; mask; mask &= mask - 1) {
+            const int c = std::countr_zero(mask);
+            if (q < t.best[c][k]) {
+                t.best[c][k] = q;
+                t.thr[c][k] = float(q) * kThresholdScale;
+                t.argX[c][k] = X;
+                t.argY[c][k] = Y;
+            }
+        }
+    }
+
+    /// Seeds: the blockers found by the neighbour tiles' nearest lanes. Each lane and
+    /// channel takes the candidate with the smallest q in float, evaluated exactly once
+    /// (any candidate is a valid first minimum; a good one prunes the traversal early).
+    void TakeSeeds(Tile& t, const Seed* seeds, int n) {
+        if (!n) return;
+        VF bestF[kMaxSectors];
+        VI bestIdx[kMaxSectors];
+        for (int c = 0; c < d_.nChannels; ++c) {
+            bestF[c] = VF{} + INFINITY;
+            bestIdx[c] = VI{} - 1;
+        }
+        for (int i = 0; i < n; ++i) {
+            const int X = seeds[i].x, Y = seeds[i].y;
+            const float b = DepthAt(X, Y);
+            const VI dx = X - t.pi, dy = Y - t.pj;
+            VI ok = (dx >= -g_.halfX) & (dx <= g_.halfX) & (dy >= -g_.halfY) &
+                    (dy <= g_.halfY) & (t.a > b);
+            if (d_.limiting) ok &= LimitingLanes(dx, dy, FlagsAt(X, Y));
+            if (!Bits(ok)) continue;
+            const VF fx = ToFloat(dx), fy = ToFloat(dy);
+            const VF dd = t.a - b;
+            const VF q = (fx * fx * wx_ + fy * fy * wy_) / (dd * dd);
+            VI member[kMaxSectors];
+            Members(dx, dy, member);
+            for (int c = 0; c < d_.nChannels; ++c) {
+                const VI better = ok & member[c] & (q < bestF[c]);
+                bestF[c] = better ? q : bestF[c];
+                bestIdx[c] = better ? (VI{} + i) : bestIdx[c];
+            }
+        }
+        for (uint32_t lanes = t.valid; lanes; lanes &= lanes - 1) {
+            const int k = std::countr_zero(lanes);
+            int last = -1;
+            for (int c = 0; c < d_.nChannels; ++c) {
+                const int i = bestIdx[c][k];
+                if (i < 0 || i == last) continue;
+                last = i;
+                Exact(t, k, seeds[i].x, seeds[i].y, DepthAt(seeds[i].x, seeds[i].y));
+            }
+        }
+    }
+
+    void SeedFromNeighbours(Tile& t, int tileX, bool left, bool up) {
+        Seed seeds[2 * kLaneTile * kMaxSectors];
+        int n = 0;
+        const int C = d_.nChannels;
+        if (left)
+            for (int i = 0; i < kLaneTile * C; ++i)
+                if (seedLeft_[size_t(i)].x != kNoSeed) seeds[n++] = seedLeft_[size_t(i)];
+        if (up)
+            for (int i = 0; i < kLaneTile * C; ++i) {
+                const Seed e = seedUp_[size_t(tileX) * kLaneTile * size_t(C) + size_t(i)];
+                if (e.x != kNoSeed) seeds[n++] = e;
+            }
+        TakeSeeds(t, seeds, n);
+    }
+
+    /// Lanes for which a node's cells (unwrapped box, min depth m) can hold a blocker
+    /// below one of the channels' minima in `channels`.
+    uint32_t NodeLanes(const Tile& t, int X0, int X1, int Y0, int Y1, float m,
+                       uint32_t channels) const {
+        VF thr = t.thr[std::countr_zero(channels)];
+        for (uint32_t c = channels & (channels - 1); c; c &= c - 1)
+            thr = Max(thr, t.thr[std::countr_zero(c)]);
+        const VI lo = Max(X0 - t.pi, VI{} - g_.halfX),
+                 hi = Min(X1 - t.pi, VI{} + g_.halfX);
+        const VI loy = Max(Y0 - t.pj, VI{} - g_.halfY),
+                 hiy = Min(Y1 - t.pj, VI{} + g_.halfY);
+        const VF fx = ToFloat(Min(Max(VI{}, lo), hi)),
+                 fy = ToFloat(Min(Max(VI{}, loy), hiy));
+        const VF s = fx * fx * wx_ + fy * fy * wy_;
+        const VF dd = t.a - m;
+        const VI pass = (lo <= hi) & (loy <= hiy) & (t.a > m) &
+                        ((dd < kTiny) | ~(s >= thr * (dd * dd)));
+        return Bits(pass);
+    }
+
+    void Traverse(Tile& t) {
+        const int W = d_.W, H = d_.H;
+        // The offsets of the tile's lanes to a box span [X0 - xMax, X1 - x0] (superset).
+        const int xMax = std::min(t.x0 + kLaneTile, W) - 1;
+        const int yMax = std::min(t.y0 + kLaneTile, H) - 1;
+        const int cx = t.x0 + kLaneTile / 2, cy = t.y0 + kLaneTile / 2;
+        Node stack[kStack];
+        int sp = 0;
+        // The nine wrap images of the root, the one holding the tile popped first.
+        for (int ty = -1; ty <= 1; ++ty)
+            for (int tx = -1; tx <= 1; ++tx)
+                if (tx != 0 || ty != 0)
+                    stack[sp++] = {int8_t(d_.top),    int8_t(tx), int8_t(ty),
+                                   uint16_t(t.valid), 0,          0};
+        stack[sp++] = {int8_t(d_.top), 0, 0, uint16_t(t.valid), 0, 0};
+        while (sp) {
+            const Node n = stack[--sp];
+            const int l = n.level;
+            const int ox = n.tx * W, oy = n.ty * H;
+            const int X0 = ox + (n.cx << l), X1 = ox + std::min((n.cx + 1) << l, W) - 1;
+            const int Y0 = oy + (n.cy << l), Y1 = oy + std::min((n.cy + 1) << l, H) - 1;
+            const size_t cell = d_.levelOff[size_t(l)] +
+                                size_t(n.cy) * size_t(d_.levelW[size_t(l)]) +
+                                size_t(n.cx);
+            const uint32_t channels =
+                d_.nChannels == 1
+                    ? 1u
+                    : ChannelsOfRect(d_, X0 - xMax, X1 - t.x0, Y0 - yMax, Y1 - t.y0);
+            if (!channels) continue;
+            float m;
+            if (d_.limiting) {
+                uint32_t cls = ClassesOfRect(X0 - xMax, X1 - t.x0, Y0 - yMax, Y1 - t.y0);
+                m = INFINITY;
+                for (; cls; cls &= cls - 1)
+                    m = std::min(
+                        m, d_.pyramids[size_t(std::countr_zero(cls)) * d_.pyramidSize +
+                                       cell]);
+            } else {
+                m = d_.pyramids[cell];
+            }
+            const uint32_t lanes = NodeLanes(t, X0, X1, Y0, Y1, m, channels) & n.lanes;
+            if (!lanes) continue;
+            if (l <= kLeafLevel) {
+                for (int Y = Y0; Y <= Y1; ++Y)
+                    for (int X = X0; X <= X1; ++X) {
+                        const size_t at = size_t(Y - oy) * size_t(W) + size_t(X - ox);
+                        const float b = d_.field->depth[at];
+                        uint32_t pass =
+                            TexelLanes(t, X, Y, b, d_.limiting ? d_.flags[at] : 0) &
+                            lanes;
+                        for (; pass; pass &= pass - 1)
+                            Exact(t, std::countr_zero(pass), X, Y, b);
+                    }
+                continue;
+            }
+            // Children, the one nearest the tile's centre pushed last (searched first).
+            const int cl = l - 1;
+            const int mx = ox + ((2 * n.cx + 1) << cl), my = oy + ((2 * n.cy + 1) << cl);
+            const int qx = cx < mx ? 0 : 1, qy = cy < my ? 0 : 1;
+            const int order[4][2] = {
+                {1 - qx, 1 - qy}, {qx, 1 - qy}, {1 - qx, qy}, {qx, qy}};
+            for (const auto& o : order) {
+                const int ccx = 2 * n.cx + o[0], ccy = 2 * n.cy + o[1];
+                if (ccx >= d_.levelW[size_t(cl)] || ccy >= d_.levelH[size_t(cl)])
+                    continue;
+                stack[sp++] = {int8_t(cl), n.tx, n.ty, uint16_t(lanes), ccx, ccy};
+            }
+        }
+    }
+
+    struct RipNode {
+        int8_t lx, ly, t1, t2;  ///< levels; image in c1 and c2
+        uint16_t lanes;
+        int32_t cx, cy;
+    };
+
+    /// The sector kinds' traversal: binary splits of rip-map cells in sheared
+    /// coordinates. A cell that straddles a lane's sector edge (c1 or c2 of the apex) is
+    /// split across it first, so the cells along an edge stay one texel wide and few.
+    void TraverseRip(Tile& t, const ConeSearchData::RipMap& rip) {
+        const int W = d_.W, H = d_.H;
+        const int a = rip.alpha, bt = rip.beta;
+        // Lanes in sheared coordinates: c1 = X - alpha * c2 (beta = 0) or c1 = X (beta !=
+        // 0, c2 = Y - beta * X); their range over the tile.
+        int p1min = INT32_MAX, p1max = INT32_MIN, p2min = INT32_MAX, p2max = INT32_MIN;
+        for (int k = 0; k < kLanes; ++k) {
+            if (!(t.valid >> k & 1u)) continue;
+            const int X = t.pi[k], Y = t.pj[k];
+            const int c1 = bt == 0 ? X - a * Y : X, c2 = bt == 0 ? Y : Y - bt * X;
+            p1min = std::min(p1min, c1), p1max = std::max(p1max, c1);
+            p2min = std::min(p2min, c2), p2max = std::max(p2max, c2);
+        }
+        RipNode stack[kStack];
+        int sp = 0;
+        // Images: the sheared fundamental domain repeats by W in c1 and H in c2; the
+        // windows (|dx| <= W/2, |dy| <= H/2) need c1 within one W plus a shear of H.
+        const int r1 = (a != 0) ? 2 : 1, r2 = (bt != 0) ? 2 : 1;
+        for (int i2 = -r2; i2 <= r2; ++i2)
+            for (int i1 = -r1; i1 <= r1; ++i1)
+                stack[sp++] = {int8_t(rip.levelsX),
+                               int8_t(rip.levelsY),
+                               int8_t(i1),
+                               int8_t(i2),
+                               uint16_t(t.valid),
+                               0,
+                               0};
+        while (sp) {
+            const RipNode n = stack[--sp];
+            const int o1 = n.t1 * W, o2 = n.t2 * H;
+            const int A0 = o1 + (n.cx << n.lx),
+                      A1 = o1 + std::min((n.cx + 1) << n.lx, W) - 1;  // c1 range
+            const int B0 = o2 + (n.cy << n.ly),
+                      B1 = o2 + std::min((n.cy + 1) << n.ly, H) - 1;  // c2 range
+            // The real bounding box of the cell.
+            const int X0 = A0 + std::min(a * B0, a * B1),
+                      X1 = A1 + std::max(a * B0, a * B1);
+            const int Y0 = B0 + std::min(bt * A0, bt * A1),
+                      Y1 = B1 + std::max(bt * A0, bt * A1);
+            // Sectors the cell can hold for some lane: quadrants of (c1, c2) offsets.
+            const int lo1 = A0 - p1max, hi1 = A1 - p1min, lo2 = B0 - p2max,
+                      hi2 = B1 - p2min;
+            uint32_t channels = 0;
+            for (uint32_t c = rip.channels; c; c &= c - 1) {
+                const int k = std::countr_zero(c);
+                // Quadrant of channel k in (c1, c2): signs from the table of the kind.
+                const int s1 = rip.sign1[size_t(k)], s2 = rip.sign2[size_t(k)];
+                const bool ok1 = s1 > 0 ? hi1 >= 0 : (s1 < 0 ? lo1 <= 0 : true);
+                const bool ok2 = s2 > 0 ? hi2 >= 0 : (s2 < 0 ? lo2 <= 0 : true);
+                if (ok1 && ok2) channels |= 1u << k;
+            }
+            if (!channels) continue;
+            const float m = rip.At(n.lx, n.ly, n.cx, n.cy);
+            const uint32_t lanes = NodeLanes(t, X0, X1, Y0, Y1, m, channels) & n.lanes;
+            if (!lanes) continue;
+            if (n.lx == 0 && n.ly == 0) {
+                const int X = A0 + a * B0, Y = B0 + bt * A0;
+                const float b = DepthAt(X, Y);
+                uint32_t pass = TexelLanes(t, X, Y, b, 0) & lanes;
+                for (; pass; pass &= pass - 1) Exact(t, std::countr_zero(pass), X, Y, b);
+                continue;
+            }
+            // Split: across a lane's edge first (c1 then c2), else the longer side.
+            const bool straddle1 = n.lx > 0 && lo1 < 0 && hi1 > 0;
+            const bool straddle2 = n.ly > 0 && lo2 < 0 && hi2 > 0;
+            bool split1;
+            if (straddle1)
+                split1 = true;
+            else if (straddle2)
+                split1 = false;
+            else
+                split1 = n.ly == 0 || (n.lx > 0 && n.lx >= n.ly);
+            RipNode c0 = n, c1 = n;
+            c0.lanes = c1.lanes = uint16_t(lanes);
+            if (split1) {
+                c0.lx = c1.lx = int8_t(n.lx - 1);
+                c0.cx = 2 * n.cx;
+                c1.cx = 2 * n.cx + 1;
+                const bool has1 = c1.cx < rip.cellsX[size_t(n.lx - 1)];
+                // The half nearer the tile's lanes is searched first (pushed last).
+                const int mid = o1 + (c1.cx << c1.lx);
+                const bool nearFirst0 = (p1min + p1max) / 2 < mid;
+                if (nearFirst0) {
+                    if (has1) stack[sp++] = c1;
+                    stack[sp++] = c0;
+                } else {
+                    stack[sp++] = c0;
+                    if (has1) stack[sp++] = c1;
+                }
+            } else {
+                c0.ly = c1.ly = int8_t(n.ly - 1);
+                c0.cy = 2 * n.cy;
+                c1.cy = 2 * n.cy + 1;
+                const bool has1 = c1.cy < rip.cellsY[size_t(n.ly - 1)];
+                const int mid = o2 + (c1.cy << c1.ly);
+                const bool nearFirst0 = (p2min + p2max) / 2 < mid;
+                if (nearFirst0) {
+                    if (has1) stack[sp++] = c1;
+                    stack[sp++] = c0;
+                } else {
+                    stack[sp++] = c0;
+                    if (has1) stack[sp++] = c1;
+                }
+            }
+        }
+    }
+
+    void Finish(const Tile& t, int tileX) {
+        const int C = d_.nChannels;
+        for (int k = 0; k < kLanes; ++k) {
+            const int i = t.x0 + k % kLaneTile, j = t.y0 + k / kLaneTile;
+            if (i >= d_.W || j >= d_.H) continue;
+            float* out = d_.out +
+                         (size_t(j) * size_t(d_.W) + size_t(i)) * size_t(d_.outStride) +
+                         size_t(d_.outBase);
+            for (int c = 0; c < C; ++c) {
+                const double q = t.best[c][k];
+                out[c] = d_.output == ConeSearchOutput::ConeNormal
+                             ? ConeNormalFromRatio(std::sqrt(q) / g_.scale)
+                             : RatioFromQ(q, g_.scale);
+            }
+        }
+        // Seeds for the next tile to the right (this tile's right column) and below
+        // (its bottom row).
+        seedLeft_.resize(size_t(kLaneTile * C));
+        for (int r = 0; r < kLaneTile; ++r)
+            for (int c = 0; c < C; ++c) {
+                const int k = r * kLaneTile + kLaneTile - 1;
+                seedLeft_[size_t(r * C + c)] = {t.argX[c][k], t.argY[c][k]};
+            }
+        for (int s = 0; s < kLaneTile; ++s)
+            for (int c = 0; c < C; ++c) {
+                const int k = (kLaneTile - 1) * kLaneTile + s;
+                seedUp_[(size_t(tileX) * kLaneTile + size_t(s)) * size_t(C) + size_t(c)] =
+                    {t.argX[c][k], t.argY[c][k]};
+            }
+    }
+
+    static constexpr int kLeafLevel = 1;
+    static constexpr int kStack = 160;  ///< 9 roots + 3 per level below (top <= 14)
+
+    const ConeSearchData& d_;
+    const Geometry& g_;
+    const float wx_, wy_;
+    Tile tile_;
+    std::vector<Seed> seedLeft_, seedUp_;
+};
+
+}  // namespace
+}  // namespace lanes
+
+/// Defines the band function of one instruction set's unit.
+#define RS_DEFINE_CONE_SEARCH(suffix)                                      \
+    namespace reliefsim::detail {                                          \
+    void ConeSearchBand##suffix(const ConeSearchData& d, int r0, int r1) { \
+        lanes::Engine e(d);                                                \
+        e.Band(r0, r1);                                                    \
+    }                                                                      \
+    }
+
+}  // namespace reliefsim::detail
