@@ -85,6 +85,9 @@ int Run(int argc, char** argv) {
     const GlFrame glFrame = gl.ReadBack();
 
     s.reference = false;  // the frame loop is timed; the reference pass is not part of it
+    // Both sides write the record and its counts; llvmpipe's twin shades nothing
+    // (glref/record_main.glsl), so the simulator does not shade either.
+    s.shade = false;
     RenderOutput warm = Render(field, s);  // warm-up
     std::vector<double> simMs;
     for (int k = 0; k < frames; ++k) simMs.push_back(Render(field, s).frameSeconds * 1e3);

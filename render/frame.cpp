@@ -115,7 +115,8 @@ class FrameProgram {
         }
         LaneBatch b;
         b.n = int(n);
-        b.px = s.px.data(), b.py = s.py.data(), b.rgb = s.rgb.data();
+        b.px = s.px.data(), b.py = s.py.data();
+        b.rgb = color_.empty() ? nullptr : s.rgb.data();
         b.u = s.u.data(), b.v = s.v.data(), b.depth = s.depth.data();
         b.nCoarse = s.nCoarse.data(), b.nRefine = s.nRefine.data();
         b.fetches = s.fetches.data(), b.texelReads = s.texels.data();
@@ -171,8 +172,9 @@ class FrameProgram {
                 nFetches[at] = fetches;
                 nTexelReads[at] = bTexels[i];
                 flags[at] = uint8_t(kFlagCovered | bFlags[i]);
-                for (int c = 0; c < 3; ++c)
-                    color[3 * at + size_t(c)] = bRgb[3 * i + size_t(c)];
+                if (bRgb)
+                    for (int c = 0; c < 3; ++c)
+                        color[3 * at + size_t(c)] = bRgb[3 * i + size_t(c)];
                 if (shadows) {
                     shadowFetches_[at] = s.shadowFetches[i];
                     visibility_[at] = s.visibility[i];
@@ -239,7 +241,10 @@ RenderOutput Render(const DepthField& field, const RenderSettings& s) {
         tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
 
     out.record.Resize(s.width, s.height);
-    out.color.assign(size_t(s.width) * size_t(s.height) * 3, 0.0f);
+    if (s.shade)
+        out.color.assign(size_t(s.width) * size_t(s.height) * 3, 0.0f);
+    else
+        out.color.clear();
     std::vector<TileTotals> tiles(size_t(TileCount(s.width, s.height)));
     const ViewUniforms uniforms = MakeViewUniforms(s);
     const Camera camera = SceneCamera(s);

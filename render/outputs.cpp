@@ -153,6 +153,8 @@ void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
                         const RenderSettings& s, const DepthField& field,
                         bool allLaneGroups) {
     if (outDir.empty()) throw Error(ParamName("out") + ": empty; give a directory");
+    if (out.color.empty())
+        throw Error(ParamName("shade") + ": off; color.png needs the shaded frame");
     const fs::path dir(outDir);
     std::error_code ec;
     if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))

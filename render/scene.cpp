@@ -97,6 +97,10 @@ void ValidateSettings(const RenderSettings& s) {
         if (!(std::hypot(double(l.x), double(l.y)) <= 1e6 * double(l.z)))
             bad(ParamName("light_dir") + " " + text + ": |XY| must be <= 1e6 Z");
     }
+    if (s.reference && !s.shade)
+        bad(ParamName("shade") +
+            ": off, but the reference's metrics compare the shaded colours; turn the "
+            "reference off too");
     if (s.method == kExactMethod) {
         if (!s.set.empty())
             bad(ParamName("set") + " " + s.set.front() +

@@ -67,6 +67,10 @@ struct RenderSettings {
     /// Also compute the exact reference of every covered pixel and the metrics against it
     /// (render/reference.h; --no-reference turns it off).
     bool reference = true;
+    /// Shade every hit into RenderOutput::color (color.png). Off: the record only, as
+    /// llvmpipe's twin writes it (bench/frame_vs_llvmpipe times both sides without
+    /// shading); RenderOutput::color is then empty.
+    bool shade = true;
 };
 
 /// Throws Error naming the first bad setting (size, angles, depth scale, tiling, threads,

@@ -285,3 +285,21 @@ TEST(Render, ShadowsDarkenOnlyWhereTheLightIsBlocked) {
         }
     }
 }
+
+TEST(Render, WithoutShadingTheRecordIsTheSame) {
+    // frame_vs_llvmpipe renders the record only (llvmpipe's twin shades nothing).
+    const DepthField f = MakeBuiltinMap("builtin:shapes:64");
+    for (const char* method : {"relief", "csm"}) {
+        RenderSettings s = Small(method);
+        s.reference = false;
+        const RenderOutput shaded = Render(f, s);
+        s.shade = false;
+        const RenderOutput plain = Render(f, s);
+        ExpectSameRecord(shaded.record, plain.record);
+        EXPECT_EQ(shaded.laneCost.warp32, plain.laneCost.warp32);
+        EXPECT_EQ(shaded.color.size(), size_t(3 * s.width * s.height));
+        EXPECT_TRUE(plain.color.empty());
+        s.reference = true;  // its metrics compare shaded colours
+        EXPECT_THROW(Render(f, s), Error);
+    }
+}
