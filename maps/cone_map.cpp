@@ -350,11 +350,15 @@ ConeMap QuantizeConeMap(const ConeMap& m, ConeEncoding enc,
     ConeMap out = m;
     if (codes) codes->assign(m.values.size(), 0);
     if (enc == ConeEncoding::Float) return out;
-    for (size_t i = 0; i < m.values.size(); ++i) {
-        const uint16_t c = EncodeRatio(m.values[i], enc);
-        out.values[i] = DecodeRatio(c, enc);
-        if (codes) (*codes)[i] = c;
-    }
+    uint16_t* code = codes ? codes->data() : nullptr;
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, m.values.size(), size_t(1) << 14),
+                      [&](const tbb::blocked_range<size_t>& r) {
+                          for (size_t i = r.begin(); i < r.end(); ++i) {
+                              const uint16_t c = EncodeRatio(m.values[i], enc);
+                              out.values[i] = DecodeRatio(c, enc);
+                              if (code) code[i] = c;
+                          }
+                      });
     return out;
 }
 

@@ -36,6 +36,12 @@ uint64_t BlockCost(const FrameRecord& r, int bw, int bh) {
 
 FrameSummary Summarize(const FrameRecord& r, const DepthField& field,
                        const SamplerState& state) {
+    std::vector<float> errors(r.flags.size());
+    for (size_t i = 0; i < errors.size(); ++i) errors[i] = PaperError(r, i, field, state);
+    return Summarize(r, errors);
+}
+
+FrameSummary Summarize(const FrameRecord& r, const std::vector<float>& paperErrors) {
     FrameSummary s;
     uint64_t sumCoarse = 0, sumRefine = 0;
     for (size_t i = 0; i < r.flags.size(); ++i) {
@@ -48,7 +54,7 @@ FrameSummary Summarize(const FrameRecord& r, const DepthField& field,
         s.maxFetches = std::max(s.maxFetches, r.nFetches[i]);
         if (r.flags[i] & kFlagBudgetExhausted) ++s.budgetExhaustedPixels;
         if (r.flags[i] & kFlagNoHit) ++s.noHitPixels;
-        double e = double(PaperError(r, i, field, state));
+        double e = double(paperErrors[i]);
         s.sumSqPaper += e * e;
         s.maxAbsErrorPaper = std::max(s.maxAbsErrorPaper, std::fabs(e));
     }

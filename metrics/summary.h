@@ -1,6 +1,8 @@
 // Frame summaries and the dissertation's error metric.
 #pragma once
 
+#include <vector>
+
 #include <cstdint>
 
 #include "core/record.h"
@@ -38,5 +40,9 @@ float PaperError(const FrameRecord& record, size_t i, const DepthField& field,
 
 FrameSummary Summarize(const FrameRecord& record, const DepthField& field,
                        const SamplerState& state);
+/// The same from each pixel's PaperError, computed elsewhere (Render computes them in
+/// parallel): paperErrors[i] = PaperError(record, i, field, state). The sums run in pixel
+/// order either way, so both give the same summary bit for bit.
+FrameSummary Summarize(const FrameRecord& record, const std::vector<float>& paperErrors);
 
 }  // namespace reliefsim

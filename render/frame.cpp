@@ -3,7 +3,9 @@
 #include "render/frame.h"
 
 #include <tbb/enumerable_thread_specific.h>
+#include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <chrono>
@@ -274,7 +276,18 @@ RenderOutput Render(const DepthField& field, const RenderSettings& s) {
         out.laneCost.warp32 += t.laneCost.warp32;
         out.laneCost.wave64 += t.laneCost.wave64;
     }
-    out.summary = Summarize(out.record, field, s.sampler);
+    // The dissertation's error of every pixel, in parallel (a sampler call each); the
+    // summary sums them in pixel order.
+    std::vector<float> paperErrors(out.record.flags.size());
+    tbb::parallel_for(tbb::blocked_range<int>(0, s.height, 16),
+                      [&](const tbb::blocked_range<int>& rows) {
+                          for (int y = rows.begin(); y < rows.end(); ++y)
+                              for (int x = 0; x < s.width; ++x) {
+                                  const size_t i = out.record.Index(x, y);
+                                  paperErrors[i] = PaperError(out.record, i, field, s.sampler);
+                              }
+                      });
+    out.summary = Summarize(out.record, paperErrors);
     if (s.reference) {
         out.hasReference = true;
         out.reference = RenderReference(field, s, out.record);
