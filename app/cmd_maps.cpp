@@ -119,16 +119,22 @@ void CheckCombinations(const MapsOptions& o, ConeKind kind) {
         const bool oneChannel = kind == ConeKind::Cone || kind == ConeKind::Relaxed ||
                                 kind == ConeKind::RelaxedExact ||
                                 kind == ConeKind::ConeNormal;
-        const bool fourChannels = kind == ConeKind::Quad || kind == ConeKind::Acm4;
-        if (!oneChannel && !fourChannels)
+        const bool manyChannels =
+            kind == ConeKind::Quad || kind == ConeKind::Acm4 || kind == ConeKind::Acm8;
+        if (!oneChannel && !manyChannels)
             refuse("--external", k + " cannot be read from an image (only cone, relaxed, "
-                                     "relaxed-exact, cone-normal, quad and acm4)");
+                                     "relaxed-exact, cone-normal, quad, acm4 and acm8)");
         if (oneChannel && all)
             refuse("--external-channel all", k + " has one channel; pick R, G, B or A");
-        if (fourChannels && !all)
-            refuse("--external-channel " +
-                       std::string(kExternalChannelNames.Name(o.externalChannel)),
-                   k + " has four channels; use --external-channel all (R, G, B, A)");
+        if (manyChannels && !all)
+            refuse(
+                "--external-channel " +
+                    std::string(kExternalChannelNames.Name(o.externalChannel)),
+                k + (kind == ConeKind::Acm8
+                         ? " has eight channels; use --external-channel all (8 channels, "
+                           "or two RGBA halves side by side)"
+                         : " has four channels; use --external-channel all (R, G, B, "
+                           "A)"));
     }
 }
 

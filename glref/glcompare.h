@@ -1,5 +1,5 @@
-// The C++ frame loop against the GLSL twins on llvmpipe: the same scene rendered both ways
-// and the records compared bit for bit (`reliefsim glcompare`, its tests and
+// The C++ frame loop against the GLSL twins on llvmpipe: the same scene rendered both
+// ways and the records compared bit for bit (`reliefsim glcompare`, its tests and
 // bench/frame_vs_llvmpipe). Built with rs_glref (EGL and GL found).
 #pragma once
 

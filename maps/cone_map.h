@@ -215,9 +215,11 @@ void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc,
                   OutputSet* outputs = nullptr);
 
 /// Loads a cone map made elsewhere (e.g. GPU Gems 3 "*_cone.tga": ratio linear in B, 8
-/// bit). channel: 0..3 = R,G,B,A; -1 = all four (Quad: R,G,B,A = +x,-x,+y,-y). The size
-/// must equal (expectWidth, expectHeight) when they are > 0. Throws Error naming the
-/// file after `option` (the command-line flag that named it).
+/// bit). channel: 0..3 = R,G,B,A; -1 = all four (Quad: R,G,B,A = +x,-x,+y,-y). Acm8 reads
+/// eight channels (channel ignored): an image with 8 or more channels, or one of 4 twice
+/// as wide (two RGBA halves side by side, sectors 0-3 left, 4-7 right, as WriteConeMap
+/// writes a PNG). The size must equal (expectWidth, expectHeight) when they are > 0.
+/// Throws Error naming the file after `option` (the parameter that named it).
 ConeMap LoadExternalConeMap(const std::string& path, ConeKind kind, int channel,
                             int expectWidth = 0, int expectHeight = 0,
                             const std::string& option = "--external");

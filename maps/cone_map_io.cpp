@@ -69,8 +69,19 @@ ConeMap LoadExternalConeMap(const std::string& path, ConeKind kind, int channel,
                             int expectWidth, int expectHeight,
                             const std::string& option) {
     const std::string subject = option + " \"" + path + "\"";
-    const int want = channel < 0 ? 4 : 1;
+    // acm8: eight channels (an EXR as `maps --kind acm8 --out m.exr` writes it), or two
+    // RGBA halves side by side (000 §II-D; the PNG `maps` writes).
+    const bool eight = kind == ConeKind::Acm8;
+    const int want = eight ? 8 : (channel < 0 ? 4 : 1);
     auto pick = [&](int nc) -> std::pair<int, int> {
+        if (eight) {
+            if (nc >= 8) return {0, 8};
+            if (nc == 4) return {0, 4};
+            throw Error(subject + ": has " + std::to_string(nc) + " channel" +
+                        (nc == 1 ? "" : "s") +
+                        "; acm8 reads 8 channels, or two RGBA halves side by side (the "
+                        "PNG of `maps --kind acm8`)");
+        }
         if ((channel < 0 && nc < 4) || channel >= nc)
             throw Error(subject + ": has " + std::to_string(nc) + " channel" +
                         (nc == 1 ? "" : "s") + "; the ratio channel " +
@@ -82,11 +93,20 @@ ConeMap LoadExternalConeMap(const std::string& path, ConeKind kind, int channel,
     };
     // 8-bit sources: the codes are converted like the GPU's unorm8, not OIIO's division.
     ImageData img = ReadImageFile(path, subject, pick, /*keep8=*/true);
-    const int W = img.width, H = img.height;
+    const bool halves = eight && img.channels == 4;
+    const int W = halves ? img.width / 2 : img.width, H = img.height;
+    if (halves && img.width % 2 != 0)
+        throw Error(
+            subject + ": is " + std::to_string(img.width) + "x" + std::to_string(H) +
+            " with 4 channels; an acm8 map of two RGBA halves is twice as wide as "
+            "the height map");
     if (expectWidth > 0 && (W != expectWidth || H != expectHeight))
-        throw Error(subject + ": is " + std::to_string(W) + "x" + std::to_string(H) +
-                    ", expected " + std::to_string(expectWidth) + "x" +
-                    std::to_string(expectHeight) + " (the height map's size)");
+        throw Error(subject + ": is " + std::to_string(img.width) + "x" +
+                    std::to_string(H) + ", expected " +
+                    std::to_string(halves ? 2 * expectWidth : expectWidth) + "x" +
+                    std::to_string(expectHeight) +
+                    (halves ? " (two RGBA halves, each the height map's size)"
+                            : " (the height map's size)"));
     ConeMap m;
     m.kind = kind;
     m.width = W;
@@ -94,13 +114,16 @@ ConeMap LoadExternalConeMap(const std::string& path, ConeKind kind, int channel,
     m.channels = want;
     m.values.resize(size_t(W) * size_t(H) * size_t(want));
     for (size_t t = 0; t < m.values.size(); ++t) {
-        const float v = img.is8 ? Unorm8ToFloat(img.values8[t]) : img.values[t];
-        if (!std::isfinite(v) || v < 0.0f) {
-            const size_t texel = t / size_t(want);
-            throw Error(subject + ": texel (" + std::to_string(texel % size_t(W)) + ", " +
-                        std::to_string(texel / size_t(W)) +
+        const size_t texel = t / size_t(want), c = t % size_t(want);
+        const size_t i = texel % size_t(W), j = texel / size_t(W);
+        // The file's value: channel c of the texel, from its half for two halves.
+        const size_t at =
+            halves ? (j * size_t(img.width) + i + (c / 4) * size_t(W)) * 4 + c % 4 : t;
+        const float v = img.is8 ? Unorm8ToFloat(img.values8[at]) : img.values[at];
+        if (!std::isfinite(v) || v < 0.0f)
+            throw Error(subject + ": texel (" + std::to_string(i) + ", " +
+                        std::to_string(j) +
                         ") holds a negative or non-finite ratio; ratios must be >= 0");
-        }
         m.values[t] = v;
     }
     return m;

@@ -1,9 +1,8 @@
 // Frame summaries and the dissertation's error metric.
 #pragma once
 
-#include <vector>
-
 #include <cstdint>
+#include <vector>
 
 #include "core/record.h"
 #include "texture/depth_field.h"

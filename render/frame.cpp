@@ -2,8 +2,8 @@
 // the lane driver, and the frame loop.
 #include "render/frame.h"
 
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
 
@@ -284,7 +284,8 @@ RenderOutput Render(const DepthField& field, const RenderSettings& s) {
                           for (int y = rows.begin(); y < rows.end(); ++y)
                               for (int x = 0; x < s.width; ++x) {
                                   const size_t i = out.record.Index(x, y);
-                                  paperErrors[i] = PaperError(out.record, i, field, s.sampler);
+                                  paperErrors[i] =
+                                      PaperError(out.record, i, field, s.sampler);
                               }
                       });
     out.summary = Summarize(out.record, paperErrors);

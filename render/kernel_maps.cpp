@@ -161,12 +161,12 @@ StoredMap ExternalMap(const DepthField& field, ConeKind kind, ConeEncoding enc,
                       const KernelMapSettings& maps) {
     const std::string subject = ParamName("cone_map") + " \"" + maps.coneMap + "\"";
     const int need = ChannelCount(kind);
-    if (need != 1 && need != 4)
+    if (need != 1 && need != 4 && need != 8)
         throw Error(subject + ": this method reads a " + std::to_string(need) +
                     "-channel map (" + std::string(ToString(kind)) +
-                    "); external maps of 1 or 4 channels only");
+                    "); external maps of 1, 4 or 8 channels only");
     ConeMap map = LoadExternalConeMap(maps.coneMap, kind,
-                                      need == 4 ? -1 : std::max(maps.coneMapChannel, 0),
+                                      need == 1 ? std::max(maps.coneMapChannel, 0) : -1,
                                       field.width, field.height, ParamName("cone_map"));
     RS_CHECK(map.channels == need);
     StoredMap m;

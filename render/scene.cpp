@@ -121,8 +121,12 @@ void ValidateSettings(const RenderSettings& s) {
         const KernelInfo& info = FindMethod(s.method);
         const auto spec = ParseKernelMap(info.maps[0]);
         if (spec && ChannelCount(spec->kind) != 1 && s.maps.coneMapChannel >= 0)
-            bad(ParamName("cone_map_channel") + ": method " + s.method +
-                " reads all four channels (" + std::string(info.maps[0]) + " map: RGBA)");
+            bad(ParamName("cone_map_channel") + ": method " + s.method + " reads all " +
+                (ChannelCount(spec->kind) == 8
+                     ? std::string("eight channels (acm8 map: 8 channels, or two RGBA "
+                                   "halves side by side)")
+                     : std::string("four channels (") + std::string(info.maps[0]) +
+                           " map: RGBA)"));
     }
     if (s.maps.coneMapChannel > 3)
         bad(ParamName("cone_map_channel") + ": must be R, G, B or A");

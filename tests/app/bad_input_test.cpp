@@ -361,7 +361,7 @@ TEST(BadInput, MapsOptionsThatDoNotApplyAreRefused) {
         {"--kind cone --threshold 0.3", "--threshold"},
         {"--kind acm4 --levels 2", "--levels"},
         {"--external-channel B", "--external-channel"},
-        {"--kind acm8 --external x.png", "--external"},
+        {"--kind acm8 --external x.png", "acm8 has eight channels"},
         {"--kind quad --external x.png --external-channel B", "--external-channel"},
         {"--kind cone --external x.png --external-channel all", "--external-channel"},
         {"--kind cone --external x.png --cache-dir c", "--cache-dir"},

@@ -251,7 +251,8 @@ std::string ReadAll(const fs::path& p) {
 TEST(Cli, ConeMapFromAFileRendersAsTheGeneratedOne) {
     // A map written by `maps` (8-bit PNG, the kernel's own encoding) and read back with
     // --cone-map gives the record the generated map gives, for a one-ratio kernel (csm:
-    // u8sqrt in R) and a directional one (acm4: four sectors in RGBA).
+    // u8sqrt in R) and directional ones (acm4: four sectors in RGBA; acm8: two RGBA
+    // halves side by side, and eight channels in an EXR).
     fs::path d = Scratch();
     const std::string scene =
         " --map builtin:shapes:64 --size 64x48 --no-reference --no-cache --quiet";
@@ -260,7 +261,8 @@ TEST(Cli, ConeMapFromAFileRendersAsTheGeneratedOne) {
         const char* kind;
         const char* encoding;
     };
-    for (const Case& c : {Case{"csm", "cone", "u8sqrt"}, Case{"acm4", "acm4", "u8"}}) {
+    for (const Case& c : {Case{"csm", "cone", "u8sqrt"}, Case{"acm4", "acm4", "u8"},
+                          Case{"acm8", "acm8", "u8"}}) {
         const fs::path map = d / (std::string(c.kind) + ".png");
         Result m = RunCli("maps --map builtin:shapes:64 --kind " + std::string(c.kind) +
                               " --encoding " + c.encoding + " --out " + map.string(),
@@ -280,6 +282,30 @@ TEST(Cli, ConeMapFromAFileRendersAsTheGeneratedOne) {
             << c.method;
         EXPECT_TRUE(ReadAll(gen / "fetches.png") == ReadAll(ext / "fetches.png"))
             << c.method;
+        if (std::string(c.kind) == "acm8") {
+            const fs::path exr = d / "acm8.exr", viaExr = d / "acm8_exr";
+            ASSERT_EQ(
+                RunCli("maps --map builtin:shapes:64 --kind acm8 --encoding u8 --out " +
+                           exr.string(),
+                       d)
+                    .exitCode,
+                0);
+            Result x = RunCli("render --method acm8" + scene + " --cone-map " +
+                                  exr.string() + " --out " + viaExr.string(),
+                              d);
+            ASSERT_EQ(x.exitCode, 0) << x.err;
+            EXPECT_TRUE(ReadAll(gen / "record.exr") == ReadAll(viaExr / "record.exr"));
+            // An RGBA map of the height map's size is not two halves: one error line,
+            // nothing written.
+            const fs::path bad = d / "acm8_bad";
+            Result b = RunCli("render --method acm8" + scene + " --cone-map " +
+                                  (d / "acm4.png").string() + " --out " + bad.string(),
+                              d);
+            EXPECT_NE(b.exitCode, 0);
+            EXPECT_EQ(CountLines(b.err), 1) << b.err;
+            EXPECT_NE(b.err.find("two RGBA halves"), std::string::npos) << b.err;
+            EXPECT_FALSE(fs::exists(bad));
+        }
         // The same file read as linear ratios is a different map: the record differs.
         if (std::string(c.encoding) == "u8sqrt") {
             const fs::path lin = d / "lin";
@@ -324,7 +350,7 @@ TEST(Cli, BadConeMapsAreOneError) {
     ExpectCleanFailure(base + "--method relief --cone-map " + one.string(),
                        "reads no cone map");
     ExpectCleanFailure(base + "--method acm4 --cone-map " + one.string(), "channel");
-    ExpectCleanFailure(base + "--method acm8 --cone-map " + one.string(), "8-channel");
+    ExpectCleanFailure(base + "--method acm8 --cone-map " + one.string(), "acm8 reads 8");
     ExpectCleanFailure(
         base + "--method csm --cone-map " + one.string() + " --cone-map-channel B",
         "channel B");
