@@ -133,6 +133,10 @@ void PrintText(const GlCompareResult& r, const GlCompareArgs& a,
         std::printf("  %-16s %8.3f%% identical (%" PRIu64 " / %" PRIu64 ")\n",
                     "light_visibility", share(sh.visibilityIdentical),
                     sh.visibilityIdentical, sh.pixels);
+        if (sh.ambient)
+            std::printf("  %-16s %8.3f%% identical (%" PRIu64 " / %" PRIu64 ")\n",
+                        "ambient_occlusion", share(sh.ambientIdentical),
+                        sh.ambientIdentical, sh.pixels);
     }
     if (r.gl.lanes.available) {
         const LaneCostCheck& l = r.laneCost;
@@ -255,7 +259,9 @@ nlohmann::json GlCompareJson(const GlCompareResult& r, const RenderOptions& o,
         };
         j["identical"]["shadow_fetches"] = share(sh.fetchesIdentical);
         j["identical"]["light_visibility"] = share(sh.visibilityIdentical);
+        if (sh.ambient) j["identical"]["ambient_occlusion"] = share(sh.ambientIdentical);
         j["shadow"] = std::string(kShadowNames.Name(s.shadow));
+        j["ao"] = std::string(kAoNames.Name(s.ao));
     }
     j["all_identical"] = c.AllIdentical() && (!r.shadow.on || r.shadow.Identical());
     nlohmann::json diffs = nlohmann::json::array();

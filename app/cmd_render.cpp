@@ -67,7 +67,8 @@ void RunAnimate(RenderArgs& a) {
             "qcsm, acm4 or acm8");
     std::vector<std::string> outputs = RenderOutputNames();
     if (!s.reference) std::erase(outputs, std::string("missed_geometry.png"));
-    if (s.shadow != ShadowKind::None) outputs.push_back("shadow_fetches.png");
+    if (s.shadow != ShadowKind::None || s.ao != AoKind::None)
+        outputs.push_back("shadow_fetches.png");
     CheckOutputDirectory("--out", a.out, outputs);
     RequireFrameMemory(s.width, s.height);
 
@@ -127,7 +128,8 @@ void RunRender(RenderArgs& a) {
     const RenderSettings& s = a.options.settings;
     std::vector<std::string> outputs = RenderOutputNames();
     if (!s.reference) std::erase(outputs, std::string("missed_geometry.png"));
-    if (s.shadow != ShadowKind::None) outputs.push_back("shadow_fetches.png");
+    if (s.shadow != ShadowKind::None || s.ao != AoKind::None)
+        outputs.push_back("shadow_fetches.png");
     std::string groupFiles;
     if (a.groupHeatmaps)
         for (const LaneGroupHeatmap& g : kLaneGroupHeatmaps)
@@ -153,7 +155,9 @@ void RunRender(RenderArgs& a) {
                   << "/{color.png,iterations.png,fetches.png,record.exr,metrics.json,"
                      "warp_trips.png,warp_utilisation.png"
                   << (s.reference ? ",missed_geometry.png" : "")
-                  << (s.shadow != ShadowKind::None ? ",shadow_fetches.png" : "")
+                  << (s.shadow != ShadowKind::None || s.ao != AoKind::None
+                          ? ",shadow_fetches.png"
+                          : "")
                   << groupFiles << "}\n";
     }
 }

@@ -138,6 +138,11 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
                     "cone shadows: the distance-field penumbra factor k (larger: harder)")
         ->capture_default_str()
         ->check(CLI::Range(0.0f, kMaxShadowPenumbra));
+    AddEnumOption(
+        cmd, "--ao", o.settings.ao, kAoNames,
+        "ambient occlusion of every hit (docs/methods/shadows.md): none, or cone "
+        "(with --method csm or cns: the cone at the hit scales the ambient term "
+        "by sin² of its half angle; one fetch, counted in shadow_fetches)");
     AddEnumOption(cmd, "--filter", o.settings.sampler.filter, kFilterNames,
                   "height sampler filter");
     AddEnumOption(cmd, "--wrap", o.settings.sampler.wrap, kWrapModeNames,

@@ -36,11 +36,11 @@ constexpr size_t kMaxConfigurations = 1000000;
 /// The render keys a view, or the top level, may set.
 const std::vector<std::string>& RenderKeys() {
     static const std::vector<std::string> kKeys = {
-        "view_angle",       "azimuth",        "distance", "fov",
-        "depth_scale",      "tiling",         "filter",   "wrap",
-        "texture_format",   "threads",        "lanes",    "camera",
-        "view_dir",         "light_dir",      "shadow",   "shadow_steps",
-        "shadow_softening", "shadow_penumbra"};
+        "view_angle",       "azimuth",         "distance", "fov",
+        "depth_scale",      "tiling",          "filter",   "wrap",
+        "texture_format",   "threads",         "lanes",    "camera",
+        "view_dir",         "light_dir",       "shadow",   "shadow_steps",
+        "shadow_softening", "shadow_penumbra", "ao"};
     return kKeys;
 }
 
@@ -104,6 +104,8 @@ void ApplyRenderKey(RenderSettings& s, const std::string& key, const ojson& v,
         s.camera = EnumValue(kCameraNames, v, at);
     } else if (key == "shadow") {
         s.shadow = EnumValue(kShadowNames, v, at);
+    } else if (key == "ao") {
+        s.ao = EnumValue(kAoNames, v, at);
     } else if (key == "shadow_steps") {
         const double n = Number(v, at);
         if (!(std::abs(n) <= 1e6) || n != double(int(n)))

@@ -14,8 +14,11 @@ enum PixelFlags : uint8_t {
     kFlagHelper =
         1u << 1,  ///< reserved: helper lanes write nothing, so never set in a frame
     kFlagBudgetExhausted =
-        1u << 2,           ///< the kernel stopped because its fetch budget ran out
-    kFlagNoHit = 1u << 3,  ///< the coarse search left the relief without a hit
+        1u << 2,  ///< the kernel stopped because its fetch budget ran out
+    /// the search ended outside the surface: the linear family left the relief without
+    /// a hit; a cone march stopped above the surface (its last point is still its
+    /// answer, shaded and lit: kernels/kernel.h KernelAnswersAtStop)
+    kFlagNoHit = 1u << 3,
 };
 
 /// One frame's per-pixel record, structure of arrays, row-major, row 0 at the top of the

@@ -139,6 +139,7 @@ struct GlReference::Impl {
     static constexpr int kTraceCapacity = 4096;
     GLuint targets[3] = {0, 0, 0};
     bool shadows = false;  ///< the scene's light-ray kernel is on: read target 2
+    bool ambient = false;  ///< ... with ambient occlusion (its z)
     GLsizei indexCount = 0;
     int width = 0, height = 0;
     Filter filter = Filter::Bilinear;
@@ -496,7 +497,9 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     glUniform2f(loc("uLightStep"), sh.lu, sh.lv);
     glUniform1f(loc("uShadowPenumbra"), sh.penumbra);
     glUniform1f(loc("uShadowRayLength"), sh.rayLength);
-    m.shadows = sh.kind != ShadowKind::None;
+    glUniform1i(loc("uAo"), sh.ao == AoKind::None ? 0 : (sh.aoFromNz ? 2 : 1));
+    m.shadows = sh.Any();
+    m.ambient = sh.ao != AoKind::None;
 
     m.lanesTemplate = LaneMeasurement{};
     if (m.measureLanes) {
@@ -571,6 +574,7 @@ GlFrame GlReference::ReadBack() {
         g.shadowFetches.assign(size_t(w) * size_t(h), 0u);
         g.visibility.assign(size_t(w) * size_t(h), 0.0f);
     }
+    if (m.ambient) g.ambient.assign(size_t(w) * size_t(h), 0.0f);
     const uint32_t texelsPerFetch = m.filter == Filter::Nearest ? 1u : 4u;
     for (int glY = 0; glY < h; ++glY) {
         const int y = h - 1 - glY;  // our row 0 is the top; GL's row 0 the bottom
@@ -592,6 +596,7 @@ GlFrame GlReference::ReadBack() {
                 g.visibility[i] = shadow[src + 0];
                 g.shadowFetches[i] = uint32_t(shadow[src + 1]);
             }
+            if (m.ambient) g.ambient[i] = shadow[src + 2];
         }
     }
     g.lanes = m.lanesTemplate;

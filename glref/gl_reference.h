@@ -82,6 +82,8 @@ struct GlFrame {
     /// light's visibility (RenderOutput's twins).
     std::vector<uint32_t> shadowFetches;
     std::vector<float> visibility;
+    /// With GlScene::shadow's ambient occlusion on (else empty): the AO factor per pixel.
+    std::vector<float> ambient;
 };
 
 /// An EGL surfaceless OpenGL 4.5 core context on llvmpipe. Sets LIBGL_ALWAYS_SOFTWARE=1

@@ -48,6 +48,9 @@ ShadowComparison CompareShadows(const RenderOutput& cpu, const GlFrame& gl) {
     if (!c.on) return c;
     if (gl.shadowFetches.size() != cpu.shadowFetches.size())
         throw Error("glcompare: the GL frame has no light-ray record");
+    c.ambient = !cpu.ambient.empty();
+    if (c.ambient && gl.ambient.size() != cpu.ambient.size())
+        throw Error("glcompare: the GL frame has no ambient occlusion");
     const FrameRecord& a = cpu.record;
     const FrameRecord& b = gl.record;
     for (size_t i = 0; i < cpu.shadowFetches.size(); ++i) {
@@ -55,6 +58,8 @@ ShadowComparison CompareShadows(const RenderOutput& cpu, const GlFrame& gl) {
         ++c.pixels;
         c.fetchesIdentical += cpu.shadowFetches[i] == gl.shadowFetches[i];
         c.visibilityIdentical += UlpDistance(cpu.visibility[i], gl.visibility[i]) == 0;
+        if (c.ambient)
+            c.ambientIdentical += UlpDistance(cpu.ambient[i], gl.ambient[i]) == 0;
     }
     return c;
 }

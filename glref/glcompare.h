@@ -29,10 +29,13 @@ std::vector<int16_t> SceneTriangles(const RenderSettings& settings);
 
 /// The light rays of both paths (--shadow), over the pixels covered by both.
 struct ShadowComparison {
-    bool on = false;  ///< the settings have a light-ray kernel
-    uint64_t pixels = 0, fetchesIdentical = 0, visibilityIdentical = 0;
+    bool on = false;       ///< the settings have a light-ray kernel (shadows or AO)
+    bool ambient = false;  ///< ... with ambient occlusion
+    uint64_t pixels = 0, fetchesIdentical = 0, visibilityIdentical = 0,
+             ambientIdentical = 0;
     bool Identical() const {
-        return fetchesIdentical == pixels && visibilityIdentical == pixels;
+        return fetchesIdentical == pixels && visibilityIdentical == pixels &&
+               (!ambient || ambientIdentical == pixels);
     }
 };
 

@@ -325,6 +325,9 @@ struct ConeStep {
     /// Every fetch reads all stacked cones (mcns).
     static constexpr bool kReadsAllLayers = kFamily == detail::ConeFamily::StackedNormal;
     static constexpr bool kReadsRatio = true;
+    /// A march that stopped above the surface answers its last point
+    /// (KernelAnswersAtStop; `hit` stays false and the record flags it kFlagNoHit).
+    static constexpr bool kAnswersAtStop = true;
     static constexpr int kConeLayers = detail::ConeFamilyLayers(kFamily);
     static constexpr std::array<GlslConstant, 2> kGlslConstants = {
         GlslConstant{"uRelaxed", kRelaxed ? 1 : 0},
@@ -333,7 +336,8 @@ struct ConeStep {
     static const KernelInfo& Info() {
         static const KernelInfo info{Preset::kName,   Preset::kTitle,    Preset::kSource,
                                      Preset::kParams, Preset::kMaps,     "cone_step.glsl",
-                                     kGlslConstants,  Preset::kEncoding, kConeLayers};
+                                     kGlslConstants,  Preset::kEncoding, kConeLayers,
+                                     kAnswersAtStop};
         return info;
     }
 

@@ -99,6 +99,8 @@ struct KernelInfo {
     /// Layers of its map as it reads it (kConeLayers: one per direction class of the
     /// directional cones; 1 otherwise).
     int mapLayers = 1;
+    /// Its answer is where it stopped even above the surface (KernelAnswersAtStop).
+    bool answersAtStop = false;
 };
 
 /// Parameter values by name: every parameter of the method, defaults filled in.
@@ -200,6 +202,15 @@ constexpr int KernelConeLayers() {
     else
         return 1;
 }
+
+/// Whether kernel K's answer is the point where it stopped even when that point lies
+/// above the surface (kAnswersAtStop: the cone family, whose conservative march only
+/// approaches the surface, as the papers' shaders shade wherever it stopped); the
+/// driver then shades and lights that point. Otherwise a lane without a hit is a miss.
+template <class K>
+concept KernelAnswersAtStop = requires {
+    requires K::kAnswersAtStop;
+};
 
 /// What a kernel reports per lane when the driver is done with it.
 template <class L>

@@ -31,6 +31,14 @@
 //    |(lu, lv, 1)| the distance travelled in the map's (uv, depth) space, k =
 //    shadow_penumbra. Fetches: as hard (each reads depth and n_z in one footprint).
 // Lanes with no hit get visibility 1 and no fetch.
+//
+// Ambient occlusion (AmbientOcclusion, render --ao cone; dissertation 004 §4.5, which
+// shows the cone ratio of CSM and the cone normal of CNS used as the AO term but gives no
+// formula): the cone at the hit bounds the open sky above it, so the ambient term is
+// scaled by the cosine-weighted fraction of the hemisphere inside the cone, sin²θ for a
+// cone of half angle θ from the normal: n_z² for cns's map (n_z = sin θ, §3.1), r² / (1 +
+// r²) for csm's ratio r = tan θ. One fetch of the cone map at the hit, counted with the
+// light rays'.
 #pragma once
 
 #include "kernels/lanes.h"
@@ -53,8 +61,11 @@ RS_INLINE typename L::F LightVisibility(const LaneTextures& tex, const ShadowJob
     F texels(0.0f);  // the view ray's texel count is not the light's
     const F h0 = SampleHeightLanes<L>(tex, u0, v0, hit, texels);
     Assign(hit, fetches, fetches + F(1.0f));
-    if (s.kind == ShadowKind::Cone) {
+    if (s.kind == ShadowKind::Hard || s.kind == ShadowKind::Cone) {
+        // The hard shadow's samples; the cone shadow reads n_z with each depth and keeps
+        // the smallest penumbra estimate of the samples it passes.
         using I = typename L::I;
+        const bool cone = s.kind == ShadowKind::Cone;
         const F step = h0 * F(s.stepInv);
         M on = hit;
         for (int i = 1; i < s.steps && Any(on); ++i) {
@@ -62,30 +73,19 @@ RS_INLINE typename L::F LightVisibility(const LaneTextures& tex, const ShadowJob
             const F t = h0 - rise;
             const F u = u0 + rise * F(s.lu), v = v0 + rise * F(s.lv);
             F nz(0.0f);
-            const F h = SampleHeightConeLanes<L>(tex, u, v, I(0), on, texels, nz);
+            const F h = cone ? SampleHeightConeLanes<L>(tex, u, v, I(0), on, texels, nz)
+                             : SampleHeightLanes<L>(tex, u, v, on, texels);
             Assign(on, fetches, fetches + F(1.0f));
             const F above = h - t;
-            const M blocked = on && (above < F(0.0f));
+            const M blocked = on && (cone ? above < F(0.0f) : h < t);
             Assign(blocked, vis, F(0.0f));
             on = on && !blocked;
-            // (A hit at the top, h0 = 0, rises by 0: no estimate, nothing above it.)
-            const F estimate = (F(s.penumbra) * (above * nz)) / (rise * F(s.rayLength));
-            Assign(on && (rise > F(0.0f)), vis, MinSse(vis, estimate));
-        }
-        return vis;
-    }
-    if (s.kind == ShadowKind::Hard) {
-        const F step = h0 * F(s.stepInv);
-        M on = hit;
-        for (int i = 1; i < s.steps && Any(on); ++i) {
-            const F rise = F(float(i)) * step;
-            const F t = h0 - rise;
-            const F u = u0 + rise * F(s.lu), v = v0 + rise * F(s.lv);
-            const F h = SampleHeightLanes<L>(tex, u, v, on, texels);
-            Assign(on, fetches, fetches + F(1.0f));
-            const M blocked = on && (h < t);
-            Assign(blocked, vis, F(0.0f));
-            on = on && !blocked;
+            if (cone) {
+                // (A hit at the top, h0 = 0, rises by 0: no estimate, nothing above it.)
+                const F estimate =
+                    (F(s.penumbra) * (above * nz)) / (rise * F(s.rayLength));
+                Assign(on && (rise > F(0.0f)), vis, MinSse(vis, estimate));
+            }
         }
         return vis;
     }
@@ -100,6 +100,25 @@ RS_INLINE typename L::F LightVisibility(const LaneTextures& tex, const ShadowJob
     Assign(hit, fetches, fetches + F(float(kSoftShadowFraction.size())));
     Assign(hit, vis, MaxSse(F(1.0f) - occlusion, F(0.0f)));
     return vis;
+}
+
+/// The ambient occlusion factor in [0, 1] at each lane's hit (u0, v0) where `hit` and
+/// s.ao is on (one fetch of the cone map there, counted into `fetches`); 1 elsewhere.
+template <class L>
+RS_INLINE typename L::F AmbientOcclusion(const LaneTextures& tex, const ShadowJob& s,
+                                         const typename L::F& u0, const typename L::F& v0,
+                                         const typename L::M& hit,
+                                         typename L::F& fetches) {
+    using F = typename L::F;
+    using I = typename L::I;
+    F ao(1.0f);
+    if (s.ao == AoKind::None || !Any(hit)) return ao;
+    F texels(0.0f), cone(0.0f);
+    SampleHeightConeLanes<L>(tex, u0, v0, I(0), hit, texels, cone);
+    Assign(hit, fetches, fetches + F(1.0f));
+    const F c2 = cone * cone;
+    Assign(hit, ao, s.aoFromNz ? c2 : c2 / (F(1.0f) + c2));
+    return ao;
 }
 
 }  // namespace reliefsim

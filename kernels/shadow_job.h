@@ -18,6 +18,15 @@ inline constexpr auto kShadowNames = MakeEnumNames<ShadowKind>({
     {"cone", ShadowKind::Cone},
 });
 
+/// Ambient occlusion of the hit (render --ao): none, or from the cone map at the hit
+/// (dissertation 004 §4.5; kernels/shadow.h AmbientOcclusion).
+enum class AoKind { None, Cone };
+
+inline constexpr auto kAoNames = MakeEnumNames<AoKind>({
+    {"none", AoKind::None},
+    {"cone", AoKind::Cone},
+});
+
 inline constexpr int kMaxShadowSteps = 1024;
 inline constexpr float kMaxShadowSoftening = 1000.0f;
 inline constexpr float kMaxShadowPenumbra = 1000.0f;
@@ -31,6 +40,13 @@ struct ShadowJob {
     float penumbra = 8.0f;       ///< cone: the distance-field penumbra factor k (Quilez)
     float rayLength = 1.0f;      ///< cone: |(lu, lv, 1)|, the ray's length per unit rise
     float lu = 0.0f, lv = 0.0f;  ///< uv per unit of rise along the light ray
+    /// Ambient occlusion from the kernel's cone map at the hit (its ratio r for csm, the
+    /// cone normal's n_z for cns: aoFromNz).
+    AoKind ao = AoKind::None;
+    bool aoFromNz = false;
+    /// Whether any light-ray kernel runs (shadows or AO): the frame then counts their
+    /// fetches apart (shadow_fetches) and keeps the visibility.
+    bool Any() const { return kind != ShadowKind::None || ao != AoKind::None; }
 };
 
 /// Tatarchuk's soft-shadow samples: fractions of the light vector, and their weights.

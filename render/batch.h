@@ -40,6 +40,9 @@ struct LaneBatch {
     /// visibility at the hit (kernels/shadow.h); both may be null.
     uint32_t* shadowFetches = nullptr;
     float* visibility = nullptr;
+    /// With BatchJob::shadow's ambient occlusion on: per lane, the AO factor (may be
+    /// null).
+    float* ambient = nullptr;
 };
 
 /// One fetch of a traced lane: where, at which ray depth, what came back.

@@ -37,12 +37,15 @@ void RunExactBatch(const BatchJob& job, LaneBatch& b) {
         F shadowFetches(0.0f);
         const F vis = LightVisibility<L>(tex, job.shadow, F(b.u[i]), F(b.v[i]), M(true),
                                          shadowFetches);
+        const F ao = AmbientOcclusion<L>(tex, job.shadow, F(b.u[i]), F(b.v[i]), M(true),
+                                         shadowFetches);
         if (b.shadowFetches) b.shadowFetches[i] = uint32_t(shadowFetches[0]);
         if (b.visibility) b.visibility[i] = vis[0];
+        if (b.ambient) b.ambient[i] = ao[0];
         if (!b.rgb) continue;
         F rgb[3] = {F(0.0f), F(0.0f), F(0.0f)};
         detail::ShadeHit<L>(tex, job.slopeScale, job.light, F(b.u[i]), F(b.v[i]),
-                            F(b.depth[i]), M(true), M(true), vis, rgb);
+                            F(b.depth[i]), M(true), M(true), vis, ao, rgb);
         for (int c = 0; c < 3; ++c) b.rgb[3 * i + c] = rgb[c][0];
     }
 }

@@ -53,14 +53,16 @@ class FrameProgram {
 
     FrameProgram(const BatchJob& job, BatchFn run, FrameRecord& record,
                  std::vector<float>& color, std::vector<TileTotals>& tiles,
-                 std::vector<uint32_t>& shadowFetches, std::vector<float>& visibility)
+                 std::vector<uint32_t>& shadowFetches, std::vector<float>& visibility,
+                 std::vector<float>& ambient)
         : job_(job),
           run_(run),
           record_(record),
           color_(color),
           tiles_(tiles),
           shadowFetches_(shadowFetches),
-          visibility_(visibility) {}
+          visibility_(visibility),
+          ambient_(ambient) {}
 
     void ShadeQuad(const QuadFragment& q, int tileIndex) {
         Scratch& s = scratch_.local();
@@ -93,7 +95,7 @@ class FrameProgram {
         std::vector<uint16_t> nCoarse, nRefine;
         std::vector<uint32_t> fetches, texels, shadowFetches;
         std::vector<uint8_t> flags;
-        std::vector<float> visibility;
+        std::vector<float> visibility, ambient;
         std::vector<uint32_t> group4x2 = std::vector<uint32_t>((kTileSize / 4) *
                                                                (kTileSize / 2)),
                               warp32 = std::vector<uint32_t>((kTileSize / 8) *
@@ -123,10 +125,15 @@ class FrameProgram {
         b.nCoarse = s.nCoarse.data(), b.nRefine = s.nRefine.data();
         b.fetches = s.fetches.data(), b.texelReads = s.texels.data();
         b.flags = s.flags.data();
-        const bool shadows = job_.shadow.kind != ShadowKind::None;
+        const bool shadows = job_.shadow.Any();
+        const bool ambient = job_.shadow.ao != AoKind::None;
         if (shadows) {
             s.shadowFetches.resize(n), s.visibility.resize(n);
             b.shadowFetches = s.shadowFetches.data(), b.visibility = s.visibility.data();
+        }
+        if (ambient) {
+            s.ambient.resize(n);
+            b.ambient = s.ambient.data();
         }
         run_(job_, b);
 
@@ -181,6 +188,7 @@ class FrameProgram {
                     shadowFetches_[at] = s.shadowFetches[i];
                     visibility_[at] = s.visibility[i];
                 }
+                if (ambient) ambient_[at] = s.ambient[i];
             }
             // A lane leaves the loop for good, so a group runs as many trips as its
             // longest-running covered lane.
@@ -207,6 +215,7 @@ class FrameProgram {
     std::vector<TileTotals>& tiles_;
     std::vector<uint32_t>& shadowFetches_;
     std::vector<float>& visibility_;
+    std::vector<float>& ambient_;
     tbb::enumerable_thread_specific<Scratch> scratch_;
 };
 
@@ -257,12 +266,14 @@ RenderOutput Render(const DepthField& field, const RenderSettings& s) {
     job.shadow = SceneShadow(s);
 
     auto start = std::chrono::steady_clock::now();
-    if (s.shadow != ShadowKind::None) {
+    if (job.shadow.Any()) {
         out.shadowFetches.assign(size_t(s.width) * size_t(s.height), 0u);
         out.visibility.assign(size_t(s.width) * size_t(s.height), 0.0f);
     }
+    if (s.ao != AoKind::None)
+        out.ambient.assign(size_t(s.width) * size_t(s.height), 0.0f);
     FrameProgram program(job, run, out.record, out.color, tiles, out.shadowFetches,
-                         out.visibility);
+                         out.visibility, out.ambient);
     const RasterStats stats = RasterizeFrame(mesh, camera, s.width, s.height, program);
     out.frameSeconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

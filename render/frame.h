@@ -55,6 +55,9 @@ struct RenderOutput {
     /// shadow_fetches), and the light's visibility at the hit in [0, 1].
     std::vector<uint32_t> shadowFetches;
     std::vector<float> visibility;
+    /// With settings.ao (else empty), per pixel: the ambient occlusion factor at the hit
+    /// in [0, 1] (record.exr ambient_occlusion; its fetch is in shadowFetches).
+    std::vector<float> ambient;
     bool hasReference = false;  ///< settings.reference: the two below are set
     ReferenceRecord reference;
     ReferenceSummary referenceSummary;

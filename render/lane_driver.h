@@ -22,7 +22,7 @@ namespace reliefsim::detail {
 
 /// The shading of a hit (not part of the kernel's counts): Lambert with a normal from
 /// central differences of the height sampler (four uncounted fetches), albedo by depth,
-/// magenta where the kernel found no hit (docs/architecture.md "Shading").
+/// magenta where the kernel has no answer (docs/architecture.md "Shading").
 /// `visibility` (kernels/shadow.h LightVisibility, 1 without shadows) scales the
 /// Lambert term.
 template <class L>
@@ -30,7 +30,7 @@ RS_INLINE void ShadeHit(const LaneTextures& tex, float slopeScale, const glm::ve
                         const typename L::F& u, const typename L::F& v,
                         const typename L::F& depth, const typename L::M& hit,
                         const typename L::M& active, const typename L::F& visibility,
-                        typename L::F (&rgb)[3]) {
+                        const typename L::F& ambient, typename L::F (&rgb)[3]) {
     using F = typename L::F;
     const float du = 1.0f / float(tex.width), dv = 1.0f / float(tex.height);
     F unused(0.0f);
@@ -50,7 +50,8 @@ RS_INLINE void ShadeHit(const LaneTextures& tex, float slopeScale, const glm::ve
     const F d = Select(depth < F(0.0f), F(0.0f), Select(depth > F(1.0f), F(1.0f), depth));
     const float top[3] = {0.93f, 0.80f, 0.55f}, deep[3] = {0.35f, 0.45f, 0.65f};
     const float miss[3] = {0.9f, 0.1f, 0.6f};  // no hit: magenta, as peers do
-    const F lit = F(0.15f) + F(0.85f) * (lambert * visibility);
+    // (ambient is 1 without AO: then F(0.15f) * 1 is 0.15f, bit for bit.)
+    const F lit = F(0.15f) * ambient + F(0.85f) * (lambert * visibility);
     for (int c = 0; c < 3; ++c) {
         const F albedo = Select(hit, F(top[c]) + F(deep[c] - top[c]) * d, F(miss[c]));
         rgb[c] = albedo * lit;
@@ -163,11 +164,16 @@ RS_INLINE void EndPack(const typename K::Params& params, const BatchJob& job,
     K::template End<L>(params, p.ray, p.state, out);
     F rgb[3] = {F(0.0f), F(0.0f), F(0.0f)};
     F shadowFetches(0.0f);
-    const F vis = LightVisibility<L>(tex, job.shadow, out.u, out.v, out.hit && p.valid,
+    // The lanes with an answer to shade and light: those that hit, and for a kernel
+    // that answers where it stopped (the cone family), every lane.
+    const typename L::M answered = KernelAnswersAtStop<K> ? typename L::M(true) : out.hit;
+    const F vis = LightVisibility<L>(tex, job.shadow, out.u, out.v, answered && p.valid,
+                                     shadowFetches);
+    const F ao = AmbientOcclusion<L>(tex, job.shadow, out.u, out.v, answered && p.valid,
                                      shadowFetches);
     if (b.rgb)
-        ShadeHit<L>(tex, job.slopeScale, job.light, out.u, out.v, out.depth, out.hit,
-                    p.valid, vis, rgb);
+        ShadeHit<L>(tex, job.slopeScale, job.light, out.u, out.v, out.depth, answered,
+                    p.valid, vis, ao, rgb);
     for (int k = 0; k < L::kWidth; ++k) {
         if (!p.valid[k]) continue;
         const int i = p.base + k;
@@ -186,6 +192,7 @@ RS_INLINE void EndPack(const typename K::Params& params, const BatchJob& job,
             for (int c = 0; c < 3; ++c) b.rgb[3 * i + c] = rgb[c][k];
         if (b.shadowFetches) b.shadowFetches[i] = uint32_t(shadowFetches[k]);
         if (b.visibility) b.visibility[i] = vis[k];
+        if (b.ambient) b.ambient[i] = ao[k];
     }
 }
 

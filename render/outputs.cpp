@@ -90,22 +90,42 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
     {
         // The light rays' fetches, counted apart from the view rays' (0 without shadows),
         // and the mean light visibility of the covered pixels that hit.
+        // The pixels with an answer (lit and shaded): those that hit, and every covered
+        // pixel of a kernel that answers where it stopped (KernelInfo::answersAtStop).
+        const bool answersAtStop =
+            s.method != kExactMethod && FindMethod(s.method).answersAtStop;
+        const auto answered = [&](size_t i) {
+            return out.record.Covered(i) &&
+                   (answersAtStop || !(out.record.flags[i] & kFlagNoHit));
+        };
         uint64_t total = 0, maxFetches = 0, lit = 0;
         double visibility = 0.0;
         for (size_t i = 0; i < out.shadowFetches.size(); ++i) {
             if (!out.record.Covered(i)) continue;
             total += out.shadowFetches[i];
             maxFetches = std::max<uint64_t>(maxFetches, out.shadowFetches[i]);
-            if (out.record.flags[i] & kFlagNoHit) continue;
+            if (!answered(i)) continue;
             visibility += double(out.visibility[i]);
             ++lit;
         }
         j["avg_shadow_fetches"] =
             m.coveredPixels ? double(total) / double(m.coveredPixels) : 0.0;
-        if (s.shadow != ShadowKind::None) {
+        if (!out.shadowFetches.empty()) {
             j["total_shadow_fetches"] = total;
             j["max_shadow_fetches"] = maxFetches;
             j["avg_light_visibility"] = lit ? visibility / double(lit) : 1.0;
+        }
+        j["ao"] = std::string(kAoNames.Name(s.ao));
+        if (!out.ambient.empty()) {
+            // The mean ambient occlusion factor of the pixels with an answer.
+            double ambient = 0.0;
+            uint64_t hits = 0;
+            for (size_t i = 0; i < out.ambient.size(); ++i) {
+                if (!answered(i)) continue;
+                ambient += double(out.ambient[i]);
+                ++hits;
+            }
+            j["avg_ambient_occlusion"] = hits ? ambient / double(hits) : 1.0;
         }
     }
     j["lane_fetches_4x2"] = m.laneFetches4x2;
@@ -243,11 +263,17 @@ void WriteRenderOutputs(const std::string& outDir, const RenderOutput& out,
     if (shadows) {
         channels.push_back({"shadow_fetches", nullptr, out.shadowFetches.data()});
         channels.push_back({"light_visibility", out.visibility.data(), nullptr});
+        if (!out.ambient.empty())
+            channels.push_back({"ambient_occlusion", out.ambient.data(), nullptr});
         shadowHeat.assign(out.shadowFetches.begin(), out.shadowFetches.end());
         WriteHeatmapPng(
             dest("shadow_fetches.png"), shadowHeat.data(), mask.data(), w, h,
             {s.fetchScaleMin, s.fetchScaleMax, "inferno",
-             "light-ray fetches, " + std::string(kShadowNames.Name(s.shadow))},
+             "light-ray fetches, " +
+                 (s.shadow != ShadowKind::None
+                      ? std::string(kShadowNames.Name(s.shadow)) +
+                            (s.ao != AoKind::None ? " shadows and AO" : " shadows")
+                      : std::string("AO"))},
             &outputs);
     }
     std::vector<float> depthError, uvError, missedRgb;

@@ -35,9 +35,9 @@ ReferenceRecord RenderReference(const DepthField& field, const RenderSettings& s
     SamplerState shading = s.sampler;
     shading.filter = Filter::Bilinear;
     BatchJob job;
-    // The cone-normal soft shadow reads the kernel's cone-normal map: bind it as the
-    // frame did (through the cache), with the shading's filter for the depth.
-    job.textures = s.shadow == ShadowKind::Cone
+    // The cone-normal soft shadow and the cone AO read the kernel's cone map: bind it as
+    // the frame did (through the cache), with the shading's filter for the depth.
+    job.textures = s.shadow == ShadowKind::Cone || s.ao != AoKind::None
                        ? BindKernelTextures(field, shading, SettingsKernel(s), s.maps)
                        : BindTextures(field, shading);
     job.params = &surface;

@@ -57,6 +57,21 @@ void ValidateSettings(const RenderSettings& s) {
     if (!(s.shadowPenumbra >= 0.0f && s.shadowPenumbra <= kMaxShadowPenumbra))
         bad(ParamName("shadow_penumbra") + " " + num(s.shadowPenumbra) +
             ": must be in [0, " + num(kMaxShadowPenumbra) + "]");
+    if (s.ao == AoKind::Cone) {
+        // The AO term reads the cone of csm's or cns's map at the hit (004 §4.5: the
+        // relaxed cones of rcs and rcns "did not allow generating good approximations").
+        const auto maps = s.method == kExactMethod ? decltype(FindMethod(s.method).maps){}
+                                                   : FindMethod(s.method).maps;
+        if (maps.size() != 1 || (maps[0] != "cone" && maps[0] != "cone-normal"))
+            bad(ParamName("ao") +
+                " cone: reads the cone map of method csm or cns (dissertation §4.5: "
+                "CSM's "
+                "ratio or CNS's cone normal); " +
+                ParamName("method") + " " + s.method + " binds " +
+                (maps.empty() ? std::string("no derived map")
+                              : "the \"" + std::string(maps[0]) + "\" map") +
+                "; use " + ParamName("method") + " csm or cns");
+    }
     if (s.shadow == ShadowKind::Cone) {
         // The cone-normal soft shadow reads the cone normal of cns's map (004 §4.4).
         const auto maps = FindMethod(s.method).maps;
@@ -171,6 +186,11 @@ ShadowJob SceneShadow(const RenderSettings& s) {
     j.lu = (l.x / l.z) * k;
     j.lv = (l.y / l.z) * k;
     j.rayLength = std::sqrt((j.lu * j.lu + j.lv * j.lv) + 1.0f);
+    j.ao = s.ao;
+    if (s.ao != AoKind::None && s.method != kExactMethod) {
+        const auto maps = FindMethod(s.method).maps;
+        j.aoFromNz = maps.size() == 1 && maps[0] == "cone-normal";
+    }
     return j;
 }
 

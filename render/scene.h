@@ -58,10 +58,13 @@ struct RenderSettings {
     int shadowSteps = 16;  ///< hard: steps from the surface to the top, [1, 1024]
     float shadowSoftening = 0.58f;  ///< soft: Tatarchuk's softening, [0, 1000]
     float shadowPenumbra = 8.0f;    ///< cone: the penumbra factor k, [0, 1000]
-    SamplerState sampler;           ///< height-map filter and wrap
-    KernelMapSettings maps;         ///< the kernel's derived maps (cone kernels)
-    int threads = 0;                ///< worker threads; 0 = all cores
-    int lanes = 0;  ///< fragment-driver lane width; 0 = the widest the CPU runs
+    /// Ambient occlusion of every hit from the kernel's cone map (--ao; csm and cns,
+    /// dissertation §4.5; kernels/shadow.h AmbientOcclusion).
+    AoKind ao = AoKind::None;
+    SamplerState sampler;    ///< height-map filter and wrap
+    KernelMapSettings maps;  ///< the kernel's derived maps (cone kernels)
+    int threads = 0;         ///< worker threads; 0 = all cores
+    int lanes = 0;           ///< fragment-driver lane width; 0 = the widest the CPU runs
     float iterScaleMin = 0.0f, iterScaleMax = 64.0f;    ///< iterations heatmap scale
     float fetchScaleMin = 0.0f, fetchScaleMax = 64.0f;  ///< fetches heatmap scale
     /// Also compute the exact reference of every covered pixel and the metrics against it

@@ -17,6 +17,9 @@ uniform int uConeFamily;    // kernels/cone_step.h ConeFamily: 2 qcsm, 3 acm4, 4
 const int kFamilyQuad = 2, kFamilyAcm4 = 3, kFamilyAcm8 = 4, kFamilyConeNormal = 5,
           kFamilyStacked = 7;
 const int kStackedCones = 4;  // kernels/kernel.h kMaxStackedCones
+// A march that stopped above the surface answers its last point (kernels/kernel.h
+// KernelAnswersAtStop): record_main.glsl lights it.
+#define RS_ANSWERS_AT_STOP 1
 
 // The cone step's depth advance (ConeStep::Advance): csm's from the ratio r, or eq. 3.2
 // from n_z (normalForm).

@@ -470,5 +470,36 @@ TEST(GlReference, RejectsGpu8AndMissingDepth8) {
     }
 }
 
+TEST(GlCompare, AmbientOcclusionIsBitIdentical) {
+    // --ao cone on csm's ratio and cns's cone normal, r32f and r8, alone and with the
+    // hard shadow: the factor and the light-ray fetches bit for bit.
+    for (const char* method : {"csm", "cns"})
+        for (TextureFormat format : {TextureFormat::R32F, TextureFormat::R8})
+            for (ShadowKind kind : {ShadowKind::None, ShadowKind::Hard}) {
+                SCOPED_TRACE(std::string(method) + " " + std::string(ToString(format)) +
+                             " shadow " + std::string(kShadowNames.Name(kind)));
+                RenderSettings s;
+                s.method = method;
+                s.ao = AoKind::Cone;
+                s.shadow = kind;
+                s.shadowSteps = 13;
+                s.lightDir = {0.5f, 0.6f, 0.6f};
+                s.sampler.precision =
+                    format == TextureFormat::R8 ? Precision::Llvmpipe8 : Precision::Float;
+                s.width = s.height = 72;
+                const GlCompareResult r =
+                    RunGlCompare(LoadField("builtin:shapes", format), s, Gl());
+                ExpectIdentical(r);
+                ASSERT_TRUE(r.shadow.on);
+                ASSERT_TRUE(r.shadow.ambient);
+                EXPECT_GT(r.shadow.pixels, 0u);
+                EXPECT_EQ(r.shadow.fetchesIdentical, r.shadow.pixels);
+                EXPECT_EQ(r.shadow.ambientIdentical, r.shadow.pixels);
+                size_t occluded = 0;
+                for (float a : r.gl.ambient) occluded += a > 0.0f && a < 0.9f;
+                EXPECT_GT(occluded, 20u);  // crevices and walls darken
+            }
+}
+
 }  // namespace
 }  // namespace reliefsim

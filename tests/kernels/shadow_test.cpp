@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "kernels/registry.h"
+#include "maps/cone_map.h"
 #include "render/batch.h"
 #include "render/kernel_maps.h"
 #include "texture/procedural.h"
@@ -23,6 +24,7 @@ namespace {
 struct Lit {
     std::vector<float> visibility;
     std::vector<uint32_t> fetches;
+    std::vector<float> ambient;
 };
 
 /// Vertical view rays (dirUv 0, so each hit lies at its entry uv) through `method` with
@@ -44,7 +46,7 @@ Lit LightRays(const DepthField& f, const ShadowJob& shadow,
     bool haveFirst = false;
     for (const LaneWidthInfo& w : LaneWidths()) {
         if (!w.supported) continue;
-        std::vector<float> u(n), v(n), depth(n), vis(n, -1.0f);
+        std::vector<float> u(n), v(n), depth(n), vis(n, -1.0f), ao(n, -1.0f);
         std::vector<uint16_t> coarse(n), refine(n);
         std::vector<uint32_t> fetches(n), texels(n), shadowFetches(n, 999u);
         std::vector<uint8_t> flags(n);
@@ -56,9 +58,10 @@ Lit LightRays(const DepthField& f, const ShadowJob& shadow,
         b.nCoarse = coarse.data(), b.nRefine = refine.data();
         b.fetches = fetches.data(), b.texelReads = texels.data(), b.flags = flags.data();
         b.shadowFetches = shadowFetches.data(), b.visibility = vis.data();
+        b.ambient = ao.data();
         w.fn(job, b);
         if (!haveFirst) {
-            first = {vis, shadowFetches};
+            first = {vis, shadowFetches, ao};
             haveFirst = true;
             continue;
         }
@@ -67,6 +70,9 @@ Lit LightRays(const DepthField& f, const ShadowJob& shadow,
                       std::bit_cast<uint32_t>(first.visibility[i]))
                 << "width " << w.width << " ray " << i;
             EXPECT_EQ(shadowFetches[i], first.fetches[i]) << "width " << w.width;
+            EXPECT_EQ(std::bit_cast<uint32_t>(ao[i]),
+                      std::bit_cast<uint32_t>(first.ambient[i]))
+                << "width " << w.width << " ray " << i;
         }
     }
     return first;
@@ -254,4 +260,58 @@ TEST(Shadow, ConeShadowIsBlockedWhereTheHardShadowIs) {
     s.penumbra = 0.05f;
     const Lit dim = LightRays(wall, s, {kFloor}, "cns");
     EXPECT_LT(dim.visibility[0], r.visibility[0]);
+}
+
+TEST(Shadow, AmbientOcclusionIsTheVisibleSkyOfTheCone) {
+    // --ao cone: the cone at the hit leaves sin²θ of the cosine-weighted sky open: n_z²
+    // of cns's cone normal, r² / (1 + r²) of csm's ratio; one fetch of the map at the
+    // hit.
+    ShadowJob ao;
+    ao.ao = AoKind::Cone;
+    // A flat plane: nothing is near. cns stores n_z = 1 (the whole sky); csm's 8-bit
+    // ratio is capped at 1 (45 degrees), which leaves half: the dissertation's "extra
+    // darkening" of CSM's AO.
+    const DepthField flat = MakeBuiltinMap("flat", 32, 32);
+    ao.aoFromNz = true;
+    Lit r = LightRays(flat, ao, {{0.3f, 0.7f}}, "cns");
+    EXPECT_EQ(r.ambient[0], 1.0f);
+    EXPECT_EQ(r.fetches[0], 1u);
+    EXPECT_EQ(r.visibility[0], 1.0f);
+    ao.aoFromNz = false;
+    r = LightRays(flat, ao, {{0.3f, 0.7f}}, "csm");
+    EXPECT_EQ(r.ambient[0], 0.5f);
+    EXPECT_EQ(r.fetches[0], 1u);
+    // The floor beside a wall, at texel centres (the bilinear fetch is the texel's own
+    // value): exactly the formula on the stored map, and darker nearer the wall.
+    const DepthField wall = Wall();
+    const std::vector<glm::vec2> uv = {{38.5f / 64.0f, kFloor.y},
+                                       {30.5f / 64.0f, kFloor.y}};
+    ao.aoFromNz = true;
+    const Lit cns = LightRays(wall, ao, uv, "cns");
+    std::vector<uint16_t> codes;
+    QuantizeConeMap(GenerateConeMap(wall, ConeKind::ConeNormal), ConeEncoding::U8,
+                    &codes);
+    for (size_t i = 0; i < uv.size(); ++i) {
+        const size_t texel = size_t(uv[i].y * 64.0f) * 64 + size_t(uv[i].x * 64.0f);
+        const float nz = Unorm8ToFloat(uint8_t(codes[texel]));
+        EXPECT_EQ(cns.ambient[i], nz * nz) << i;
+        EXPECT_EQ(cns.fetches[i], 1u);
+    }
+    EXPECT_LT(cns.ambient[0], cns.ambient[1]);
+    EXPECT_LT(cns.ambient[0], 1.0f);
+    ao.aoFromNz = false;
+    const Lit csm = LightRays(wall, ao, uv, "csm");
+    QuantizeConeMap(GenerateConeMap(wall, ConeKind::Cone), ConeEncoding::U8Sqrt, &codes);
+    for (size_t i = 0; i < uv.size(); ++i) {
+        const size_t texel = size_t(uv[i].y * 64.0f) * 64 + size_t(uv[i].x * 64.0f);
+        const float s = Unorm8ToFloat(uint8_t(codes[texel]));
+        const float r2 =
+            (s * s) * (s * s);  // u8sqrt: the ratio is squared after sampling
+        EXPECT_EQ(csm.ambient[i], r2 / (1.0f + r2)) << i;
+    }
+    EXPECT_LT(csm.ambient[0], csm.ambient[1]);
+    // Without AO the factor is 1 and nothing is fetched.
+    const Lit none = LightRays(wall, ShadowJob{}, uv, "csm");
+    EXPECT_EQ(none.ambient[0], 1.0f);
+    EXPECT_EQ(none.fetches[0], 0u);
 }
