@@ -302,6 +302,13 @@ class Engine {
         VF thr = t.thr[std::countr_zero(channels)];
         for (uint32_t c = channels & (channels - 1); c; c &= c - 1)
             thr = Max(thr, t.thr[std::countr_zero(c)]);
+        return Bits(BoundLanes(t, X0, X1, Y0, Y1, m, thr));
+    }
+
+    /// The lanes whose lower bound over the box (nearest offset in the lane's window,
+    /// depth m) lies below their threshold `thr`.
+    VI BoundLanes(const Tile& t, int X0, int X1, int Y0, int Y1, float m,
+                  const VF& thr) const {
         const VI lo = Max(X0 - t.pi, VI{} - g_.halfX),
                  hi = Min(X1 - t.pi, VI{} + g_.halfX);
         const VI loy = Max(Y0 - t.pj, VI{} - g_.halfY),
@@ -310,9 +317,8 @@ class Engine {
                  fy = ToFloat(Min(Max(VI{}, loy), hiy));
         const VF s = fx * fx * wx_ + fy * fy * wy_;
         const VF dd = t.a - m;
-        const VI pass = (lo <= hi) & (loy <= hiy) & (t.a > m) &
-                        ((dd < kTiny) | ~(s >= thr * (dd * dd)));
-        return Bits(pass);
+        return (lo <= hi) & (loy <= hiy) & (t.a > m) &
+               ((dd < kTiny) | ~(s >= thr * (dd * dd)));
     }
 
     void Traverse(Tile& t) {
@@ -407,6 +413,10 @@ class Engine {
             p1min = std::min(p1min, c1), p1max = std::max(p1max, c1);
             p2min = std::min(p2min, c2), p2max = std::max(p2max, c2);
         }
+        // Each lane's own sheared coordinates: a cell's channels per lane (a subset of
+        // the tile's) give each lane the threshold of the sectors it can meet there.
+        const VI lc1 = bt == 0 ? t.pi - a * t.pj : t.pi;
+        const VI lc2 = bt == 0 ? t.pj : t.pj - bt * t.pi;
         RipNode stack[kStack];
         int sp = 0;
         // Images: the sheared fundamental domain repeats by W in c1 and H in c2; the
@@ -447,7 +457,24 @@ class Engine {
             }
             if (!channels) continue;
             const float m = rip.At(n.lx, n.ly, n.cx, n.cy);
-            const uint32_t lanes = NodeLanes(t, X0, X1, Y0, Y1, m, channels) & n.lanes;
+            // Per lane, the largest threshold of the channels whose quadrant the cell
+            // meets (the same sign test as above, with the lane's own offsets).
+            const VI lo1v = A0 - lc1, hi1v = A1 - lc1, lo2v = B0 - lc2, hi2v = B1 - lc2;
+            VF thr = VF{} - INFINITY;
+            VI meets{};
+            for (uint32_t c = channels; c; c &= c - 1) {
+                const int k = std::countr_zero(c);
+                const int s1 = rip.sign1[size_t(k)], s2 = rip.sign2[size_t(k)];
+                VI ok = VI{} - 1;
+                if (s1 > 0) ok &= hi1v >= 0;
+                if (s1 < 0) ok &= lo1v <= 0;
+                if (s2 > 0) ok &= hi2v >= 0;
+                if (s2 < 0) ok &= lo2v <= 0;
+                thr = ok ? Max(thr, t.thr[k]) : thr;
+                meets |= ok;
+            }
+            const uint32_t lanes =
+                Bits(meets & BoundLanes(t, X0, X1, Y0, Y1, m, thr)) & n.lanes;
             if (!lanes) continue;
             if (n.lx == 0 && n.ly == 0) {
                 const int X = A0 + a * B0, Y = B0 + bt * A0;
