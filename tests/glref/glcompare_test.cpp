@@ -316,6 +316,20 @@ TEST(GlCompare, LeastConeStepsAreBitIdentical) {
 // The light-ray kernels' twin (shadow.glsl): hard and soft shadows over a linear, a
 // cone and a directional kernel, float and 8-bit, orbit and ortho views: the light rays'
 // fetches and visibility bit-identical, and the view rays' record untouched.
+/// The light-ray scenes of the shadow and AO tests: `method` on 72x72 with a low light
+/// and 13 light-ray steps, sampled as `format` stores the map.
+RenderSettings LightScene(const char* method, ShadowKind kind, TextureFormat format) {
+    RenderSettings s;
+    s.method = method;
+    s.shadow = kind;
+    s.shadowSteps = 13;
+    s.lightDir = {0.5f, 0.6f, 0.6f};
+    s.sampler.precision =
+        format == TextureFormat::R8 ? Precision::Llvmpipe8 : Precision::Float;
+    s.width = s.height = 72;
+    return s;
+}
+
 TEST(GlCompare, ShadowsAreBitIdentical) {
     int compared = 0;
     for (const char* method : {"relief", "csm", "acm4", "pom"})
@@ -325,17 +339,9 @@ TEST(GlCompare, ShadowsAreBitIdentical) {
                     SCOPED_TRACE(std::string(method) + " " +
                                  std::string(kShadowNames.Name(kind)) + " " +
                                  std::string(ToString(format)));
-                    RenderSettings s;
-                    s.method = method;
-                    s.shadow = kind;
-                    s.shadowSteps = 13;
+                    RenderSettings s = LightScene(method, kind, format);
                     s.camera = camera;
                     s.viewDir = {0.4f, -0.3f, -0.8f};
-                    s.lightDir = {0.5f, 0.6f, 0.6f};
-                    s.sampler.precision = format == TextureFormat::R8
-                                              ? Precision::Llvmpipe8
-                                              : Precision::Float;
-                    s.width = s.height = 72;
                     const GlCompareResult r =
                         RunGlCompare(LoadField("builtin:shapes", format), s, Gl());
                     ExpectIdentical(r);
@@ -352,16 +358,9 @@ TEST(GlCompare, ShadowsAreBitIdentical) {
     for (TextureFormat format : {TextureFormat::R32F, TextureFormat::R8})
         for (CameraKind camera : {CameraKind::Orbit, CameraKind::Ortho}) {
             SCOPED_TRACE(std::string("cns cone ") + std::string(ToString(format)));
-            RenderSettings s;
-            s.method = "cns";
-            s.shadow = ShadowKind::Cone;
-            s.shadowSteps = 13;
+            RenderSettings s = LightScene("cns", ShadowKind::Cone, format);
             s.camera = camera;
             s.viewDir = {0.4f, -0.3f, -0.8f};
-            s.lightDir = {0.5f, 0.6f, 0.6f};
-            s.sampler.precision =
-                format == TextureFormat::R8 ? Precision::Llvmpipe8 : Precision::Float;
-            s.width = s.height = 72;
             const GlCompareResult r =
                 RunGlCompare(LoadField("builtin:shapes", format), s, Gl());
             ExpectIdentical(r);
@@ -478,15 +477,8 @@ TEST(GlCompare, AmbientOcclusionIsBitIdentical) {
             for (ShadowKind kind : {ShadowKind::None, ShadowKind::Hard}) {
                 SCOPED_TRACE(std::string(method) + " " + std::string(ToString(format)) +
                              " shadow " + std::string(kShadowNames.Name(kind)));
-                RenderSettings s;
-                s.method = method;
+                RenderSettings s = LightScene(method, kind, format);
                 s.ao = AoKind::Cone;
-                s.shadow = kind;
-                s.shadowSteps = 13;
-                s.lightDir = {0.5f, 0.6f, 0.6f};
-                s.sampler.precision =
-                    format == TextureFormat::R8 ? Precision::Llvmpipe8 : Precision::Float;
-                s.width = s.height = 72;
                 const GlCompareResult r =
                     RunGlCompare(LoadField("builtin:shapes", format), s, Gl());
                 ExpectIdentical(r);
