@@ -8,6 +8,8 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstdint>
+#include <cstdlib>
 #include <nlohmann/json.hpp>
 #include <numeric>
 #include <sstream>
@@ -148,18 +150,88 @@ uint8_t SectorMask(ConeKind kind, const Geometry& g, int dx, int dy) {
     }
 }
 
-std::vector<Offset> MakeOffsets(const Geometry& g, ConeKind sectors) {
+uint8_t CellSectorMask(ConeKind kind, const Geometry& g, int dx, int dy) {
+    // The square of differences in the directions' space (x * H, y * W), exact.
+    const int64_t x0 = int64_t(dx - 1) * g.h, x1 = int64_t(dx + 1) * g.h;
+    const int64_t y0 = int64_t(dy - 1) * g.w, y1 = int64_t(dy + 1) * g.w;
+    switch (kind) {
+        case ConeKind::Quad:  // open half planes
+            return uint8_t((x1 > 0 ? 1 : 0) | (x0 < 0 ? 2 : 0) | (y1 > 0 ? 4 : 0) |
+                           (y0 < 0 ? 8 : 0));
+        case ConeKind::Acm4:
+        case ConeKind::Acm8: {
+            // A closed convex wedge and a rectangle meet iff a corner of the rectangle
+            // lies in the wedge or one of the wedge's two rays meets the rectangle
+            // (otherwise the rectangle, being connected, lies wholly outside).
+            static constexpr int kB4[5][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}, {1, 0}};
+            static constexpr int kB8[9][2] = {{1, 0},  {1, 1},  {0, 1},
+                                              {-1, 1}, {-1, 0}, {-1, -1},
+                                              {0, -1}, {1, -1}, {1, 0}};
+            auto rayMeets = [&](const int* a) {
+                // t >= 0 with t * a in [x0, x1] x [y0, y1].
+                int64_t lo = 0, hi = INT64_MAX;
+                auto axis = [&](int ac, int64_t c0, int64_t c1) {
+                    if (ac == 0) {
+                        if (c0 > 0 || c1 < 0) hi = -1;
+                    } else if (ac > 0) {
+                        lo = std::max(lo, c0), hi = std::min(hi, c1);
+                    } else {
+                        lo = std::max(lo, -c1), hi = std::min(hi, -c0);
+                    }
+                };
+                axis(a[0], x0, x1);
+                axis(a[1], y0, y1);
+                return lo <= hi;
+            };
+            const int n = kind == ConeKind::Acm4 ? 4 : 8;
+            uint8_t m = 0;
+            for (int k = 0; k < n; ++k) {
+                const int* a = kind == ConeKind::Acm4 ? kB4[k] : kB8[k];
+                const int* b = kind == ConeKind::Acm4 ? kB4[k + 1] : kB8[k + 1];
+                bool meets = rayMeets(a) || rayMeets(b);
+                for (int c = 0; c < 4 && !meets; ++c) {
+                    const int64_t vx = (c & 1) ? x1 : x0, vy = (c & 2) ? y1 : y0;
+                    meets = a[0] * vy - a[1] * vx >= 0 && vx * b[1] - vy * b[0] >= 0;
+                }
+                if (meets) m |= uint8_t(1u << k);
+            }
+            return m;
+        }
+        default:
+            return 1;
+    }
+}
+
+namespace {
+
+/// The offset (dx, dy) between texels, or between cells (MakeTiledOffsets); false for
+/// the ones left out.
+bool MakeOffset(const Geometry& g, ConeKind sectors, bool cells, int dx, int dy,
+                Offset& o) {
+    if (!cells) {
+        if (dx == 0 && dy == 0) return false;
+        o = {dx, dy, g.S(dx, dy), SectorMask(sectors, g, dx, dy)};
+        return true;
+    }
+    if (std::abs(dx) <= 1 && std::abs(dy) <= 1) return false;
+    o = {dx, dy, g.S(CellGap(dx), CellGap(dy)), CellSectorMask(sectors, g, dx, dy)};
+    return true;
+}
+
+}  // namespace
+
+std::vector<Offset> MakeOffsets(const Geometry& g, ConeKind sectors, bool cells) {
     std::vector<Offset> offs;
     offs.reserve(size_t(2 * g.halfX + 1) * size_t(2 * g.halfY + 1));
     for (int dy = -g.halfY; dy <= g.halfY; ++dy)
         for (int dx = -g.halfX; dx <= g.halfX; ++dx) {
-            if (dx == 0 && dy == 0) continue;
-            offs.push_back({dx, dy, g.S(dx, dy), SectorMask(sectors, g, dx, dy)});
+            Offset o;
+            if (MakeOffset(g, sectors, cells, dx, dy, o)) offs.push_back(o);
         }
     return offs;
 }
 
-TiledOffsets MakeTiledOffsets(const Geometry& g, ConeKind sectors) {
+TiledOffsets MakeTiledOffsets(const Geometry& g, ConeKind sectors, bool cells) {
     TiledOffsets to;
     const int nx = (2 * g.halfX + 1 + kTile - 1) / kTile;
     const int ny = (2 * g.halfY + 1 + kTile - 1) / kTile;
@@ -177,8 +249,8 @@ TiledOffsets MakeTiledOffsets(const Geometry& g, ConeKind sectors) {
             t.mask = 0;
             for (int dy = t.oy; dy < std::min(t.oy + kTile, g.halfY + 1); ++dy)
                 for (int dx = t.ox; dx < std::min(t.ox + kTile, g.halfX + 1); ++dx) {
-                    if (dx == 0 && dy == 0) continue;
-                    Offset o{dx, dy, g.S(dx, dy), SectorMask(sectors, g, dx, dy)};
+                    Offset o;
+                    if (!MakeOffset(g, sectors, cells, dx, dy, o)) continue;
                     to.offsets.push_back(o);
                     t.minS = std::min(t.minS, o.s);
                     t.mask |= o.mask;

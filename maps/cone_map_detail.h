@@ -89,9 +89,22 @@ struct TiledOffsets {
     std::vector<OffsetSuperTile> supers;
     std::vector<int> superOrder;  ///< tile indices, grouped by super-tile
 };
-TiledOffsets MakeTiledOffsets(const Geometry& g, ConeKind sectors);
+/// cells = true: the offsets between bilinear cells (maps/cone_map_bilinear.h) instead
+/// of texels: the near ones (|dx| <= 1 and |dy| <= 1) left out, s = S(CellGap(dx),
+/// CellGap(dy)) (the squared uv distance between the two cells) and the mask
+/// CellSectorMask.
+TiledOffsets MakeTiledOffsets(const Geometry& g, ConeKind sectors, bool cells = false);
 /// The same offsets in plain scan order (for brute force).
-std::vector<Offset> MakeOffsets(const Geometry& g, ConeKind sectors);
+std::vector<Offset> MakeOffsets(const Geometry& g, ConeKind sectors, bool cells = false);
+
+/// The gap, in texels, between two cells (or texel squares) `d` apart along an axis.
+inline int CellGap(int d) { return d > 1 ? d - 1 : (d < -1 ? -d - 1 : 0); }
+
+/// Sector masks between cells: bit k set when some point of the cell at offset (dx, dy)
+/// lies in sector k (as SectorMask: closed wedges, quad's open half planes) of some
+/// point of the cell at the origin, i.e. when the square [dx - 1, dx + 1] x [dy - 1,
+/// dy + 1] of their differences meets the sector.
+uint8_t CellSectorMask(ConeKind kind, const Geometry& g, int dx, int dy);
 
 /// out[(j*W + i)*C + c] = min of v[(y*W + x)*C + c] over x = i + a*step, y = j + b*step,
 /// a, b in [0, k), wrapped (C interleaved channels). With v itself a window minimum of

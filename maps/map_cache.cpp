@@ -36,7 +36,8 @@ uint64_t HashValue(uint64_t h, const T& v) {
 }
 }  // namespace
 
-uint64_t ConeMapCacheKey(const DepthField& hf, ConeKind kind, const ConeMapParams& p) {
+uint64_t ConeMapCacheKey(const DepthField& hf, ConeKind kind, const ConeMapParams& p,
+                         ConeBounds bounds) {
     uint64_t h = Mix64(kMagic ^ kVersion);
     h = HashValue(h, hf.width);
     h = HashValue(h, hf.height);
@@ -49,6 +50,7 @@ uint64_t ConeMapCacheKey(const DepthField& hf, ConeKind kind, const ConeMapParam
     h = HashValue(h, int(p.adaptive));
     h = HashValue(h, p.threshold);
     h = HashValue(h, p.adaptiveLevels);
+    if (bounds != ConeBounds::Texel) h = HashValue(h, int(bounds));
     return h;
 }
 
@@ -120,8 +122,9 @@ void MapCache::Store(uint64_t key, const ConeMap& m) const {
 }
 
 ConeMap MapCache::GetOrCreate(const DepthField& hf, ConeKind kind, const ConeMapParams& p,
-                              const std::function<ConeMap()>& make, bool* hit) const {
-    const uint64_t key = ConeMapCacheKey(hf, kind, p);
+                              const std::function<ConeMap()>& make, bool* hit,
+                              ConeBounds bounds) const {
+    const uint64_t key = ConeMapCacheKey(hf, kind, p, bounds);
     if (auto m = Load(key); m && m->width == hf.width && m->height == hf.height) {
         if (hit) *hit = true;
         return *m;
