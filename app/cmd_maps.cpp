@@ -14,6 +14,7 @@
 #include "core/memory.h"
 #include "core/output_set.h"
 #include "maps/cone_map.h"
+#include "maps/cone_map_bilinear.h"
 #include "maps/map_cache.h"
 #include "maps/mip_pyramid.h"
 
@@ -41,6 +42,7 @@ struct MapsOptions {
     int externalChannel = 2;  ///< B, where GPU Gems 3 keeps its cone ratios
     bool adaptive = false;
     bool safety = false;
+    ConeBounds bounds = ConeBounds::Texel;
     bool relaxed = false;
     bool normal = false;
     float threshold = 0.25f;
@@ -67,7 +69,7 @@ void CheckCombinations(const MapsOptions& o, ConeKind kind) {
         for (const char* opt :
              {"--encoding", "--adaptive", "--threshold", "--levels", "--search-steps",
               "--stacked-count", "--relaxed", "--normal", "--safety", "--external",
-              "--external-channel", "--cache-dir", "--animate", "--bins"})
+              "--external-channel", "--cache-dir", "--animate", "--bins", "--cone-bounds"})
             if (o.Given(opt))
                 refuse(opt, "does not apply to " + k +
                                 " (a pyramid of depths, written as one MIP-mapped file)");
@@ -81,11 +83,21 @@ void CheckCombinations(const MapsOptions& o, ConeKind kind) {
         for (const char* opt :
              {"--out", "--cache-dir", "--external", "--external-channel", "--safety",
               "--encoding", "--search-steps", "--stacked-count", "--relaxed", "--normal",
-              "--bins"})
+              "--bins", "--cone-bounds"})
             if (o.Given(opt))
                 refuse(opt,
                        "does not apply with --animate (frames are regenerated and timed, "
                        "not written)");
+    }
+    if (o.bounds == ConeBounds::Bilinear) {
+        if (!HasBilinearBounds(kind))
+            refuse("--cone-bounds bilinear",
+                   "applies to --kind cone, cone-normal, quad, acm4 and acm8 only, not " +
+                       k);
+        for (const char* opt : {"--adaptive", "--relaxed", "--external", "--safety"})
+            if (o.Given(opt))
+                refuse(opt, "does not apply with --cone-bounds bilinear (the exact "
+                            "conservative maps of the bilinear surface)");
     }
     if (o.adaptive && !sectorKind)
         refuse("--adaptive",
@@ -305,6 +317,10 @@ void Run(const MapsOptions& o) {
         return;
     }
 
+    const auto generate = [&] {
+        return o.bounds == ConeBounds::Bilinear ? GenerateBilinearConeMap(hf, kind, p)
+                                                : GenerateConeMap(hf, kind, p);
+    };
     ConeMap m;
     Status("generating");
     if (!o.external.empty()) {
@@ -313,10 +329,10 @@ void Run(const MapsOptions& o) {
         bool hit = false;
         m = MapCache(o.cacheDir)
                 .GetOrCreate(
-                    hf, kind, p, [&] { return GenerateConeMap(hf, kind, p); }, &hit);
+                    hf, kind, p, [&] { return generate(); }, &hit, o.bounds);
         std::printf("cache: %s\n", hit ? "hit" : "miss (generated and stored)");
     } else {
-        m = GenerateConeMap(hf, kind, p);
+        m = generate();
     }
     if (o.safety) m = BilinearSafetyPass(m);
     const ConeMap stored = QuantizeConeMap(m, enc);
@@ -368,6 +384,9 @@ void RegisterMapsCommand(CLI::App& root) {
                   "stacked: store n_z = r / sqrt(1 + r^2) of each cone (mcns) instead of "
                   "its ratio");
     cmd->add_flag("--safety", o->safety, "3x3-minimum bilinear safety pass (Ban et al.)");
+    AddEnumOption(cmd, "--cone-bounds", o->bounds, kConeBoundsNames,
+                  "the surface the cones bound: texel centres (the papers) or the "
+                  "bilinear surface between them (cone, cone-normal, quad, acm4, acm8)");
     cmd->add_option("--out", o->out,
                     "output: .exr (float, one channel per ratio) or .png (8-bit)");
     cmd->add_option("--cache-dir", o->cacheDir,

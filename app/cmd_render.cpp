@@ -65,6 +65,10 @@ void RunAnimate(RenderArgs& a) {
             ": --animate preprocesses every frame with adaptive ACM (000 Algorithm "
             "1), which makes cone, quad, acm4 and acm8 maps; use --method csm, "
             "qcsm, acm4 or acm8");
+    if (s.maps.bounds == ConeBounds::Bilinear)
+        throw Error(
+            "--cone-bounds bilinear: --animate preprocesses every frame with adaptive "
+            "ACM, whose maps bound the texel centres; leave --cone-bounds out");
     std::vector<std::string> outputs = RenderOutputNames();
     if (!s.reference) std::erase(outputs, std::string("missed_geometry.png"));
     if (s.shadow != ShadowKind::None || s.ao != AoKind::None)

@@ -40,7 +40,7 @@ const std::vector<std::string>& RenderKeys() {
         "depth_scale",      "tiling",          "filter",   "wrap",
         "texture_format",   "threads",         "lanes",    "camera",
         "view_dir",         "light_dir",       "shadow",   "shadow_steps",
-        "shadow_softening", "shadow_penumbra", "ao"};
+        "shadow_softening", "shadow_penumbra", "ao",       "cone_bounds"};
     return kKeys;
 }
 
@@ -106,6 +106,8 @@ void ApplyRenderKey(RenderSettings& s, const std::string& key, const ojson& v,
         s.shadow = EnumValue(kShadowNames, v, at);
     } else if (key == "ao") {
         s.ao = EnumValue(kAoNames, v, at);
+    } else if (key == "cone_bounds") {
+        s.maps.bounds = EnumValue(kConeBoundsNames, v, at);
     } else if (key == "shadow_steps") {
         const double n = Number(v, at);
         if (!(std::abs(n) <= 1e6) || n != double(int(n)))

@@ -117,19 +117,24 @@ StoredMap GeneratedMap(const DepthField& field, ConeKind kind,
     ConeMap map;
     bool hit = false;
     const std::string dir = maps.cacheDir.empty() ? DefaultMapCacheDir() : maps.cacheDir;
+    const auto generate = [&] {
+        return maps.bounds == ConeBounds::Bilinear
+                   ? GenerateBilinearConeMap(field, kind, params)
+                   : GenerateConeMap(field, kind, params);
+    };
     if (maps.generator) {
+        RS_CHECK(maps.bounds == ConeBounds::Texel);
         map = maps.generator(field, kind, params);
     } else if (maps.useCache && !dir.empty()) {
         try {
-            map = MapCache(dir).GetOrCreate(
-                field, kind, params, [&] { return GenerateConeMap(field, kind, params); },
-                &hit);
+            map = MapCache(dir).GetOrCreate(field, kind, params, generate, &hit,
+                                            maps.bounds);
         } catch (const Error&) {
             // An unwritable cache costs the regeneration next time, not this run.
-            if (map.values.empty()) map = GenerateConeMap(field, kind, params);
+            if (map.values.empty()) map = generate();
         }
     } else {
-        map = GenerateConeMap(field, kind, params);
+        map = generate();
     }
     if (cacheHit) *cacheHit = hit;
     RS_CHECK(map.width == field.width && map.height == field.height &&

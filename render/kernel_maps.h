@@ -11,6 +11,7 @@
 
 #include "kernels/registry.h"
 #include "maps/cone_map.h"
+#include "maps/cone_map_bilinear.h"
 #include "texture/lane_sampler.h"
 
 namespace reliefsim {
@@ -26,6 +27,9 @@ struct KernelMapSettings {
     /// --cone-map-channel for one-ratio kernels: 0..3 = R, G, B, A; -1 (unset): R.
     /// Directional kernels read all four (RGBA, as maps --kind quad|acm4 writes them).
     int coneMapChannel = -1;
+    /// --cone-bounds: the surface a generated conservative map bounds; bilinear makes
+    /// GenerateBilinearConeMap's maps (csm, qcsm, acm4, acm8, cns only).
+    ConeBounds bounds = ConeBounds::Texel;
     /// When set, makes the kernel's map (float ratios, the kind's channels) instead of
     /// GenerateConeMap and the cache: `render --animate` preprocesses every frame's map
     /// with adaptive ACM this way. The map is then encoded like a generated one.

@@ -148,6 +148,22 @@ void ValidateSettings(const RenderSettings& s) {
     if (s.maps.encoding &&
         (s.method == kExactMethod || FindMethod(s.method).maps.empty()))
         bad(ParamName("cone_encoding") + ": method " + s.method + " reads no cone map");
+    if (s.maps.bounds == ConeBounds::Bilinear) {
+        const std::string opt = ParamName("cone_bounds") + " bilinear";
+        if (s.method == kExactMethod || FindMethod(s.method).maps.empty())
+            bad(opt + ": method " + s.method + " reads no cone map");
+        const std::string_view name = FindMethod(s.method).maps[0];
+        const auto spec = ParseKernelMap(name);
+        if (!spec || !HasBilinearBounds(spec->kind) || spec->params.relaxed ||
+            spec->params.normal)
+            bad(opt + ": method " + s.method + " reads a \"" + std::string(name) +
+                "\" map, which has no bilinear-bound variant (csm, qcsm, acm4, acm8 and "
+                "cns read one that has)");
+        if (!s.maps.coneMap.empty())
+            bad(opt + ": applies to generated maps, not to " + ParamName("cone_map"));
+        if (s.maps.generator)
+            bad(opt + ": the map generator given (adaptive ACM) makes texel-bound maps");
+    }
     PickLaneWidth(s.lanes);
 }
 

@@ -372,6 +372,13 @@ TEST(Cli, BadConeMapsAreOneError) {
     ExpectCleanFailure(
         base + "--method csm --cone-map " + flt.string() + " --cone-map-encoding u8",
         "8-bit");
+    ExpectCleanFailure(base + "--method csm --cone-bounds bilinear --cone-map " + one.string(),
+                       "--cone-bounds bilinear");
+    ExpectCleanFailure(base + "--method rcs --cone-bounds bilinear", "rcs");
+    ExpectCleanFailure(base + "--method mcns --cone-bounds bilinear", "mcns");
+    ExpectCleanFailure(base + "--method relief --cone-bounds bilinear", "reads no cone map");
+    ExpectCleanFailure(base + "--method exact --cone-bounds bilinear", "reads no cone map");
+    ExpectCleanFailure(base + "--method csm --cone-bounds bilinaer", "--cone-bounds");
     ExpectCleanFailure(base + "--method csm --texture-format r8 --cone-map " +
                            flt.string() + " --cone-map-encoding float",
                        "--cone-map-encoding float");

@@ -114,6 +114,35 @@ TEST(MapsCli, RelaxedFlagOnAnotherKind) {
     ExpectCleanFailure("--map builtin:shapes:16 --kind cone-normal --normal", "--normal");
 }
 
+TEST(MapsCli, BilinearBoundsWriteAndRefuse) {
+    const fs::path d = Scratch();
+    const std::string base = "maps --map builtin:shapes:32 --cone-bounds bilinear ";
+    const Result r = RunCli(base + "--kind acm8 --out " + (d / "b.exr").string(), d);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_NE(r.out.find("acm8 32x32 x8"), std::string::npos) << r.out;
+    // Cached apart from the texel-bound map of the same kind and field.
+    const std::string cache = " --cache-dir " + (d / "c").string();
+    for (const char* bounds : {"bilinear", "texel"}) {
+        const Result c = RunCli("maps --map builtin:shapes:32 --kind cone --cone-bounds " +
+                                    std::string(bounds) + cache,
+                                d);
+        ASSERT_EQ(c.exitCode, 0) << c.err;
+        EXPECT_NE(c.out.find("cache: miss"), std::string::npos) << bounds << c.out;
+    }
+    ExpectCleanFailure("--map builtin:shapes:16 --kind relaxed --cone-bounds bilinear",
+                       "--cone-bounds bilinear");
+    ExpectCleanFailure("--map builtin:shapes:16 --kind stacked --cone-bounds bilinear",
+                       "--cone-bounds bilinear");
+    ExpectCleanFailure("--map builtin:shapes:16 --kind acm4 --adaptive --cone-bounds bilinear",
+                       "--adaptive");
+    ExpectCleanFailure("--map builtin:shapes:16 --kind cone --safety --cone-bounds bilinear",
+                       "--safety");
+    ExpectCleanFailure("--map builtin:shapes:16 --kind cone --cone-bounds exact",
+                       "--cone-bounds");
+    ExpectCleanFailure("--map builtin:shapes:16 --kind maxmip --cone-bounds texel",
+                       "--cone-bounds");
+}
+
 TEST(MapsCli, CacheMissThenHit) {
     const fs::path d = Scratch();
     const std::string args =

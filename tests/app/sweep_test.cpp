@@ -147,6 +147,15 @@ TEST(Sweep, BadConfigurationsNameTheCulprit) {
     ExpectConfigError(
         R"({"size": "0x3", "maps": ["builtin:shapes"], "methods": [{"method": "relief"}]})",
         "size");
+    ExpectConfigError(
+        R"({"maps": ["builtin:shapes"], "cone_bounds": "exact", "methods": [{"method": "csm"}]})",
+        "\"exact\" is unknown");
+    ExpectConfigError(
+        R"({"maps": ["builtin:shapes"], "cone_bounds": "bilinear", "methods": [{"method": "rcs"}]})",
+        "no bilinear-bound variant");
+    EXPECT_NO_THROW(ParseSweepConfig(
+        R"({"maps": ["builtin:shapes"], "views": [{"cone_bounds": "bilinear"}, {}], "methods": [{"method": "acm4"}]})",
+        "cfg"));
 }
 
 TEST(Sweep, RefusesHugeCrossProductsAndOutOfRangeIntegers) {

@@ -251,6 +251,26 @@ TEST(GlCompare, ConeFiltersAreBitIdentical) {
     EXPECT_GE(compared, 8 * 4 * 2);  // csm, rcs, qcsm, acm4, acm8, cns, rcns, mcns
 }
 
+// Maps bounding the bilinear surface (--cone-bounds bilinear) are read by the same
+// texture path: every kernel that has them, float and 8-bit encodings.
+TEST(GlCompare, BilinearBoundMapsAreBitIdentical) {
+    int compared = 0;
+    for (const char* method : {"csm", "qcsm", "acm4", "acm8", "cns"})
+        for (const char* enc : {"float", "default"}) {
+            SCOPED_TRACE(std::string(method) + " encoding " + enc);
+            RenderSettings s;
+            s.method = method;
+            s.set = {"cone_filter=min4"};
+            s.width = s.height = 96;
+            s.maps.bounds = ConeBounds::Bilinear;
+            if (std::string(enc) == "float") s.maps.encoding = ConeEncoding::Float;
+            ExpectIdentical(
+                RunGlCompare(LoadField("builtin:shapes", TextureFormat::R32F), s, Gl()));
+            ++compared;
+        }
+    EXPECT_EQ(compared, 10);
+}
+
 // Every coarse search with every refinement (kernels/refine.h and refine.glsl): float
 // and 8-bit heights, early exit and fixed loops, and a budget that cuts refinements.
 TEST(GlCompare, RefinementsAreBitIdentical) {
