@@ -24,26 +24,38 @@ namespace reliefsim::detail {
 namespace lanes {
 namespace {
 
-constexpr int kLanes = kLaneTile * kLaneTile;
+// A unit's lanes: RS_CONE_SEARCH_LANES (16, 8 or 4) before the include, one native
+// register of its instruction set (wider generic vectors than the ISA's registers spill
+// heavily: 16 lanes on AVX2 took ~5x the time of 8). The tile is kTileW x kTileH apexes,
+// kTileW = kLaneTile; the tile rows of RunConeSearch's bands (kLaneTile texels high) are
+// searched kTileH rows at a time.
+#ifndef RS_CONE_SEARCH_LANES
+#define RS_CONE_SEARCH_LANES 16
+#endif
+constexpr int kLanes = RS_CONE_SEARCH_LANES;
+constexpr int kTileW = kLaneTile;
+constexpr int kTileH = kLanes / kLaneTile;
+static_assert(kTileH >= 1 && kTileW * kTileH == kLanes && kLaneTile % kTileH == 0);
 typedef int32_t VI __attribute__((vector_size(4 * kLanes)));
 typedef float VF __attribute__((vector_size(4 * kLanes)));
 
 /// Bit k set where lane k of a comparison result (0 or -1) is set.
 RS_INLINE uint32_t Bits(const VI& m) {
-#if defined(__AVX512DQ__)
+#if defined(__AVX512DQ__) && RS_CONE_SEARCH_LANES == 16
     __m512i v;
     static_assert(sizeof(v) == sizeof(m));
     __builtin_memcpy(&v, &m, sizeof(v));
     return _mm512_movepi32_mask(v);
-#elif defined(__AVX2__)
-    __m256 h[2];
-    __builtin_memcpy(h, &m, sizeof(h));
-    return uint32_t(_mm256_movemask_ps(h[0])) | uint32_t(_mm256_movemask_ps(h[1])) << 8;
-#elif defined(__SSE4_1__)
-    __m128 q[4];
-    __builtin_memcpy(q, &m, sizeof(q));
-    return uint32_t(_mm_movemask_ps(q[0])) | uint32_t(_mm_movemask_ps(q[1])) << 4 |
-           uint32_t(_mm_movemask_ps(q[2])) << 8 | uint32_t(_mm_movemask_ps(q[3])) << 12;
+#elif defined(__AVX2__) && RS_CONE_SEARCH_LANES == 8
+    __m256 h;
+    static_assert(sizeof(h) == sizeof(m));
+    __builtin_memcpy(&h, &m, sizeof(h));
+    return uint32_t(_mm256_movemask_ps(h));
+#elif defined(__SSE4_1__) && RS_CONE_SEARCH_LANES == 4
+    __m128 q;
+    static_assert(sizeof(q) == sizeof(m));
+    __builtin_memcpy(&q, &m, sizeof(q));
+    return uint32_t(_mm_movemask_ps(q));
 #else
     uint32_t b = 0;
     for (int k = 0; k < kLanes; ++k) b |= uint32_t(m[k] != 0) << k;
@@ -87,28 +99,34 @@ class Engine {
 
     /// Searches every tile of tile rows [r0, r1).
     void Band(int r0, int r1) {
-        const int tilesX = (d_.W + kLaneTile - 1) / kLaneTile;
-        seedUp_.assign(size_t(tilesX) * kLaneTile * size_t(d_.nChannels), {kNoSeed, 0});
+        const int tilesX = (d_.W + kTileW - 1) / kTileW;
+        seedUp_.assign(size_t(tilesX) * kTileW * size_t(d_.nChannels), {kNoSeed, 0});
         for (int r = r0; r < r1; ++r) {
-            bool haveLeft = false;
-            for (int t = 0; t < tilesX; ++t) {
-                Tile& tile = tile_;
-                Begin(tile, t * kLaneTile, r * kLaneTile);
-                SeedFromNeighbours(tile, t, haveLeft, r > r0);
-                if (tile.valid) {
-                    if (d_.rips.empty())
-                        Traverse(tile);
-                    else
-                        for (const auto& rip : d_.rips) TraverseRip(tile, rip);
-                }
-                Finish(tile, t);
-                haveLeft = true;
-            }
+            for (int y = r * kLaneTile; y < std::min((r + 1) * kLaneTile, d_.H);
+                 y += kTileH)
+                Row(y, tilesX, y > r0 * kLaneTile);
             if (d_.progress) d_.progress->Add(1);
         }
     }
 
   private:
+    /// The tiles of the kTileH texel rows from y; `up`: the row above was searched
+    /// (its seeds are in seedUp_).
+    void Row(int y, int tilesX, bool up) {
+        for (int t = 0; t < tilesX; ++t) {
+            Tile& tile = tile_;
+            Begin(tile, t * kTileW, y);
+            SeedFromNeighbours(tile, t, t > 0, up);
+            if (tile.valid) {
+                if (d_.rips.empty())
+                    Traverse(tile);
+                else
+                    for (const auto& rip : d_.rips) TraverseRip(tile, rip);
+            }
+            Finish(tile, t);
+        }
+    }
+
     static constexpr int32_t kNoSeed = INT32_MIN;
     struct Seed {
         int32_t x, y;
@@ -119,7 +137,7 @@ class Engine {
         t.y0 = y0;
         t.valid = 0;
         for (int k = 0; k < kLanes; ++k) {
-            const int i = x0 + k % kLaneTile, j = y0 + k / kLaneTile;
+            const int i = x0 + k % kTileW, j = y0 + k / kTileW;
             const bool in = i < d_.W && j < d_.H;
             t.pi[k] = in ? i : x0;
             t.pj[k] = in ? j : y0;
@@ -281,15 +299,15 @@ class Engine {
     }
 
     void SeedFromNeighbours(Tile& t, int tileX, bool left, bool up) {
-        Seed seeds[2 * kLaneTile * kMaxSectors];
+        Seed seeds[(kTileW + kTileH) * kMaxSectors];
         int n = 0;
         const int C = d_.nChannels;
         if (left)
-            for (int i = 0; i < kLaneTile * C; ++i)
+            for (int i = 0; i < kTileH * C; ++i)
                 if (seedLeft_[size_t(i)].x != kNoSeed) seeds[n++] = seedLeft_[size_t(i)];
         if (up)
-            for (int i = 0; i < kLaneTile * C; ++i) {
-                const Seed e = seedUp_[size_t(tileX) * kLaneTile * size_t(C) + size_t(i)];
+            for (int i = 0; i < kTileW * C; ++i) {
+                const Seed e = seedUp_[size_t(tileX) * kTileW * size_t(C) + size_t(i)];
                 if (e.x != kNoSeed) seeds[n++] = e;
             }
         TakeSeeds(t, seeds, n);
@@ -324,9 +342,9 @@ class Engine {
     void Traverse(Tile& t) {
         const int W = d_.W, H = d_.H;
         // The offsets of the tile's lanes to a box span [X0 - xMax, X1 - x0] (superset).
-        const int xMax = std::min(t.x0 + kLaneTile, W) - 1;
-        const int yMax = std::min(t.y0 + kLaneTile, H) - 1;
-        const int cx = t.x0 + kLaneTile / 2, cy = t.y0 + kLaneTile / 2;
+        const int xMax = std::min(t.x0 + kTileW, W) - 1;
+        const int yMax = std::min(t.y0 + kTileH, H) - 1;
+        const int cx = t.x0 + kTileW / 2, cy = t.y0 + kTileH / 2;
         Node stack[kStack];
         int sp = 0;
         // The nine wrap images of the root, the one holding the tile popped first.
@@ -531,7 +549,7 @@ class Engine {
     void Finish(const Tile& t, int tileX) {
         const int C = d_.nChannels;
         for (int k = 0; k < kLanes; ++k) {
-            const int i = t.x0 + k % kLaneTile, j = t.y0 + k / kLaneTile;
+            const int i = t.x0 + k % kTileW, j = t.y0 + k / kTileW;
             if (i >= d_.W || j >= d_.H) continue;
             float* out = d_.out +
                          (size_t(j) * size_t(d_.W) + size_t(i)) * size_t(d_.outStride) +
@@ -545,16 +563,16 @@ class Engine {
         }
         // Seeds for the next tile to the right (this tile's right column) and below
         // (its bottom row).
-        seedLeft_.resize(size_t(kLaneTile * C));
-        for (int r = 0; r < kLaneTile; ++r)
+        seedLeft_.resize(size_t(kTileH * C));
+        for (int r = 0; r < kTileH; ++r)
             for (int c = 0; c < C; ++c) {
-                const int k = r * kLaneTile + kLaneTile - 1;
+                const int k = r * kTileW + kTileW - 1;
                 seedLeft_[size_t(r * C + c)] = {t.argX[c][k], t.argY[c][k]};
             }
-        for (int s = 0; s < kLaneTile; ++s)
+        for (int s = 0; s < kTileW; ++s)
             for (int c = 0; c < C; ++c) {
-                const int k = (kLaneTile - 1) * kLaneTile + s;
-                seedUp_[(size_t(tileX) * kLaneTile + size_t(s)) * size_t(C) + size_t(c)] =
+                const int k = (kTileH - 1) * kTileW + s;
+                seedUp_[(size_t(tileX) * kTileW + size_t(s)) * size_t(C) + size_t(c)] =
                     {t.argX[c][k], t.argY[c][k]};
             }
     }
