@@ -1,6 +1,6 @@
 // Derived-map generation (docs/cone_maps.md, Performance): every kind at 1024² on the
 // DirectX SDK rocks resized to 8 and 16 bits, the float built-ins and stones at 2048²
-// (16-bit); the growth with size (256² to 2048²) and its fitted exponent; the ACM paper's
+// (16-bit), and the bilinear-bound maps (maps/cone_map_bilinear.h) on the same; the growth with size (256² to 2048²) and its fitted exponent; the ACM paper's
 // dynamic map (regenerate + adaptive ACM4 per frame); plain against adaptive ACM.
 // Maps from ../shared/data are made at run time and skipped when it is absent.
 #include <benchmark/benchmark.h>
@@ -14,6 +14,7 @@
 
 #include "bench/bench_maps.h"
 #include "maps/cone_map.h"
+#include "maps/cone_map_bilinear.h"
 #include "texture/procedural.h"
 
 namespace reliefsim {
@@ -43,14 +44,31 @@ void GenerateOnce(benchmark::State& state, std::shared_ptr<const DepthField> fie
                             int64_t(field->height));
 }
 
-/// One benchmark per map and kind, named BM_ConeMap/<map>/<kind>. Each generation is
-/// one iteration (they take seconds).
+void GenerateBilinearOnce(benchmark::State& state, std::shared_ptr<const DepthField> field,
+                          ConeKind kind) {
+    for (auto _ : state) benchmark::DoNotOptimize(GenerateBilinearConeMap(*field, kind));
+    state.SetItemsProcessed(state.iterations() * int64_t(field->width) *
+                            int64_t(field->height));
+}
+
+/// One benchmark per map and kind, named BM_ConeMap/<map>/<kind>, and per kind with a
+/// bilinear-bound variant BM_ConeMapBilinear/<map>/<kind> (`--cone-bounds bilinear`).
+/// Each generation is one iteration (they take seconds).
 void RegisterMap(const std::string& name, std::shared_ptr<const DepthField> field,
                  bool conservativeOnly = false) {
     for (const NamedKind& k : kKinds) {
         if (conservativeOnly && k.kind != ConeKind::Cone) continue;
         benchmark::RegisterBenchmark(("BM_ConeMap/" + name + "/" + k.name).c_str(),
                                      GenerateOnce, field, k.kind)
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime()
+            ->Iterations(1);
+    }
+    for (const NamedKind& k : kKinds) {
+        if (!HasBilinearBounds(k.kind) || (conservativeOnly && k.kind != ConeKind::Cone))
+            continue;
+        benchmark::RegisterBenchmark(("BM_ConeMapBilinear/" + name + "/" + k.name).c_str(),
+                                     GenerateBilinearOnce, field, k.kind)
             ->Unit(benchmark::kMillisecond)
             ->UseRealTime()
             ->Iterations(1);
