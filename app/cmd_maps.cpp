@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <nlohmann/json.hpp>
 
 #include "app/commands.h"
 #include "app/enum_option.h"
@@ -346,7 +347,9 @@ void Run(const MapsOptions& o) {
         outputs.Add(o.out);
         outputs.Add(StatsPath(o.out));  // both destinations checked before any writing
         WriteConeMap(o.out, m, enc, &outputs);
-        outputs.Write(StatsPath(o.out), ConeMapStatsJson(stored, s, enc) + "\n");
+        nlohmann::json stats = nlohmann::json::parse(ConeMapStatsJson(stored, s, enc));
+        stats["cone_bounds"] = std::string(kConeBoundsNames.Name(o.bounds));
+        outputs.Write(StatsPath(o.out), stats.dump(2) + "\n");
         outputs.Commit();
         std::printf("wrote %s and %s\n", o.out.c_str(), StatsPath(o.out).c_str());
     }

@@ -47,8 +47,8 @@ TEST(MapsCli, WritesMapAndStatisticsIntoANewFolder) {
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_TRUE(fs::exists(out));
     const std::string json = Slurp(d / "new" / "acm.stats.json");
-    for (const char* key :
-         {"\"kind\": \"acm4\"", "\"encoding\": \"u8\"", "\"histogram\"", "\"mean\""})
+    for (const char* key : {"\"kind\": \"acm4\"", "\"encoding\": \"u8\"", "\"histogram\"",
+                            "\"mean\"", "\"cone_bounds\": \"texel\""})
         EXPECT_NE(json.find(key), std::string::npos) << key << "\n" << json;
     EXPECT_NE(r.out.find("acm4 32x32 x4"), std::string::npos) << r.out;
     // Not a terminal: no progress bar on stderr.
@@ -120,6 +120,8 @@ TEST(MapsCli, BilinearBoundsWriteAndRefuse) {
     const Result r = RunCli(base + "--kind acm8 --out " + (d / "b.exr").string(), d);
     ASSERT_EQ(r.exitCode, 0) << r.err;
     EXPECT_NE(r.out.find("acm8 32x32 x8"), std::string::npos) << r.out;
+    EXPECT_NE(Slurp(d / "b.stats.json").find("\"cone_bounds\": \"bilinear\""),
+              std::string::npos);
     // Cached apart from the texel-bound map of the same kind and field.
     const std::string cache = " --cache-dir " + (d / "c").string();
     for (const char* bounds : {"bilinear", "texel"}) {
