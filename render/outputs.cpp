@@ -70,6 +70,8 @@ nlohmann::json MetricsJson(const RenderOutput& out, const RenderSettings& s,
     j["tiling"] = ShortestDouble(s.tiling);
     j["filter"] = std::string(ToString(s.sampler.filter));
     j["wrap"] = std::string(ToString(s.sampler.wrap));
+    if (s.method != kExactMethod && !FindMethod(s.method).maps.empty())
+        j["cone_bounds"] = std::string(kConeBoundsNames.Name(s.maps.bounds));
     j["covered_pixels"] = m.coveredPixels;
     j["avg_iterations"] = m.avgIterations;
     j["avg_coarse_iterations"] = m.avgCoarse;

@@ -19,6 +19,7 @@ namespace {
 using reliefsim::testing::CountLines;
 using reliefsim::testing::RunCli;
 using Result = reliefsim::testing::CliResult;
+using reliefsim::testing::Slurp;
 
 fs::path Scratch() { return reliefsim::testing::Scratch("rs_cli_"); }
 
@@ -379,6 +380,12 @@ TEST(Cli, BadConeMapsAreOneError) {
     ExpectCleanFailure(base + "--method relief --cone-bounds bilinear", "reads no cone map");
     ExpectCleanFailure(base + "--method exact --cone-bounds bilinear", "reads no cone map");
     ExpectCleanFailure(base + "--method csm --cone-bounds bilinaer", "--cone-bounds");
+    const fs::path out = d / "bil";
+    ASSERT_EQ(RunCli(base + "--method acm8 --cone-bounds bilinear --out " + out.string(), d)
+                  .exitCode,
+              0);
+    EXPECT_NE(Slurp(out / "metrics.json").find("\"cone_bounds\": \"bilinear\""),
+              std::string::npos);
     ExpectCleanFailure(base + "--method csm --texture-format r8 --cone-map " +
                            flt.string() + " --cone-map-encoding float",
                        "--cone-map-encoding float");
