@@ -223,8 +223,34 @@ std::string TraceCommand(const RenderOptions& o, int x, int y) {
         << Number(s.distance) << " --fov " << Number(s.fovY) << " --depth-scale "
         << Number(s.depthScale) << " --tiling " << Number(s.tiling) << " --filter "
         << ToString(s.sampler.filter) << " --wrap " << ToString(s.sampler.wrap)
-        << " --texture-format " << kTextureFormatNames.Name(s.sampler.precision)
-        << " --trace-pixel " << x << "," << y;
+        << " --texture-format " << kTextureFormatNames.Name(s.sampler.precision);
+    auto vec3 = [](const glm::vec3& v) {
+        return Number(v.x) + "," + Number(v.y) + "," + Number(v.z);
+    };
+    cmd << " --camera " << kCameraNames.Name(s.camera);
+    if (s.camera == CameraKind::Ortho) cmd << " --view-dir " << vec3(s.viewDir);
+    cmd << " --light-dir " << vec3(s.lightDir);
+    if (s.shadow != ShadowKind::None) {
+        cmd << " --shadow " << kShadowNames.Name(s.shadow);
+        if (s.shadow == ShadowKind::Hard || s.shadow == ShadowKind::Cone)
+            cmd << " --shadow-steps " << s.shadowSteps;
+        if (s.shadow == ShadowKind::Soft)
+            cmd << " --shadow-softening " << Number(s.shadowSoftening);
+        if (s.shadow == ShadowKind::Cone)
+            cmd << " --shadow-penumbra " << Number(s.shadowPenumbra);
+    }
+    if (s.ao != AoKind::None) cmd << " --ao " << kAoNames.Name(s.ao);
+    // The cone map as it was made or given.
+    if (!s.maps.coneMap.empty()) {
+        cmd << " --cone-map " << s.maps.coneMap;
+        if (s.maps.coneMapChannel >= 0) cmd << " --cone-map-channel " << "RGBA"[s.maps.coneMapChannel];
+        if (s.maps.encoding) cmd << " --cone-map-encoding " << ToString(*s.maps.encoding);
+    } else if (s.maps.encoding) {
+        cmd << " --cone-encoding " << ToString(*s.maps.encoding);
+    }
+    if (s.maps.bounds != ConeBounds::Texel)
+        cmd << " --cone-bounds " << kConeBoundsNames.Name(s.maps.bounds);
+    cmd << " --trace-pixel " << x << "," << y;
     return cmd.str();
 }
 

@@ -461,8 +461,27 @@ TEST(GlCompare, TraceCommandReproducesTheScene) {
     const std::string cmd = TraceCommand(o, 3, 4);
     for (const char* part :
          {"reliefsim glcompare", "--method secant", "--set refine_steps=4",
-          "--size 64x32", "--texture-format r8", "--trace-pixel 3,4"})
+          "--size 64x32", "--texture-format r8", "--trace-pixel 3,4", "--camera orbit",
+          "--light-dir "})
         EXPECT_NE(cmd.find(part), std::string::npos) << part << " in " << cmd;
+    // Everything else that shapes the scene: camera, light, shadows, the cone map.
+    RenderOptions c;
+    c.settings.method = "cns";
+    c.size = "32x32";
+    c.settings.camera = CameraKind::Ortho;
+    c.viewDir = "0.25,0,-1";
+    c.settings.shadow = ShadowKind::Cone;
+    c.settings.shadowSteps = 7;
+    c.settings.ao = AoKind::Cone;
+    c.coneEncoding = "float";
+    c.settings.maps.bounds = ConeBounds::Bilinear;
+    ResolveRenderSettings(c);
+    const std::string all = TraceCommand(c, 1, 2);
+    for (const char* part :
+         {"--camera ortho", "--view-dir 0.25,0,-1", "--shadow cone", "--shadow-steps 7",
+          "--shadow-penumbra ", "--ao cone", "--cone-encoding float",
+          "--cone-bounds bilinear"})
+        EXPECT_NE(all.find(part), std::string::npos) << part << " in " << all;
 }
 
 TEST(GlReference, EmbedsEveryGlslTwin) {
