@@ -20,7 +20,7 @@ namespace reliefsim {
 
 namespace {
 
-bool CpuHas([[maybe_unused]] const char* what) {
+[[maybe_unused]] bool CpuHas([[maybe_unused]] const char* what) {
 #if defined(__x86_64__) || defined(__i386__)
     __builtin_cpu_init();
     if (std::string_view(what) == "avx2")
