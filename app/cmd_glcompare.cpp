@@ -243,7 +243,9 @@ std::string TraceCommand(const RenderOptions& o, int x, int y) {
     // The cone map as it was made or given.
     if (!s.maps.coneMap.empty()) {
         cmd << " --cone-map " << s.maps.coneMap;
-        if (s.maps.coneMapChannel >= 0) cmd << " --cone-map-channel " << "RGBA"[s.maps.coneMapChannel];
+        if (s.maps.coneMapChannel >= 0)
+            cmd << " --cone-map-channel "
+                << "RGBA"[s.maps.coneMapChannel];
         if (s.maps.encoding) cmd << " --cone-map-encoding " << ToString(*s.maps.encoding);
     } else if (s.maps.encoding) {
         cmd << " --cone-encoding " << ToString(*s.maps.encoding);

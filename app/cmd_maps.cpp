@@ -70,7 +70,8 @@ void CheckCombinations(const MapsOptions& o, ConeKind kind) {
         for (const char* opt :
              {"--encoding", "--adaptive", "--threshold", "--levels", "--search-steps",
               "--stacked-count", "--relaxed", "--normal", "--safety", "--external",
-              "--external-channel", "--cache-dir", "--animate", "--bins", "--cone-bounds"})
+              "--external-channel", "--cache-dir", "--animate", "--bins",
+              "--cone-bounds"})
             if (o.Given(opt))
                 refuse(opt, "does not apply to " + k +
                                 " (a pyramid of depths, written as one MIP-mapped file)");
@@ -97,8 +98,9 @@ void CheckCombinations(const MapsOptions& o, ConeKind kind) {
                        k);
         for (const char* opt : {"--adaptive", "--relaxed", "--external", "--safety"})
             if (o.Given(opt))
-                refuse(opt, "does not apply with --cone-bounds bilinear (the exact "
-                            "conservative maps of the bilinear surface)");
+                refuse(opt,
+                       "does not apply with --cone-bounds bilinear (the exact "
+                       "conservative maps of the bilinear surface)");
     }
     if (o.adaptive && !sectorKind)
         refuse("--adaptive",

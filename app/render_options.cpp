@@ -179,10 +179,11 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
                     "with --cone-map: the ratio's channel, R|G|B|A (default R); "
                     "directional kernels (qcsm, acm4) read RGBA")
         ->type_name("C");
-    AddEnumOption(cmd, "--cone-bounds", o.settings.maps.bounds, kConeBoundsNames,
-                  "cone kernels (csm, qcsm, acm4, acm8, cns): the surface their generated "
-                  "map bounds, the texel centres (as the papers) or the bilinear surface "
-                  "between them (conservative for it with any cone_filter)");
+    AddEnumOption(
+        cmd, "--cone-bounds", o.settings.maps.bounds, kConeBoundsNames,
+        "cone kernels (csm, qcsm, acm4, acm8, cns): the surface their generated "
+        "map bounds, the texel centres (as the papers) or the bilinear surface "
+        "between them (conservative for it with any cone_filter)");
     cmd->add_option("--cone-map-encoding", o.coneMapEncoding,
                     "with --cone-map: how its values store the ratio, " +
                         ConeEncodingList() +

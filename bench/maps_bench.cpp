@@ -1,8 +1,9 @@
 // Derived-map generation (docs/cone_maps.md, Performance): every kind at 1024² on the
 // DirectX SDK rocks resized to 8 and 16 bits, the float built-ins and stones at 2048²
-// (16-bit), and the bilinear-bound maps (maps/cone_map_bilinear.h) on the same; the growth with size (256² to 2048²) and its fitted exponent; the ACM paper's
-// dynamic map (regenerate + adaptive ACM4 per frame); plain against adaptive ACM.
-// Maps from ../shared/data are made at run time and skipped when it is absent.
+// (16-bit), and the bilinear-bound maps (maps/cone_map_bilinear.h) on the same; the
+// growth with size (256² to 2048²) and its fitted exponent; the ACM paper's dynamic map
+// (regenerate + adaptive ACM4 per frame); plain against adaptive ACM. Maps from
+// ../shared/data are made at run time and skipped when it is absent.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -44,8 +45,8 @@ void GenerateOnce(benchmark::State& state, std::shared_ptr<const DepthField> fie
                             int64_t(field->height));
 }
 
-void GenerateBilinearOnce(benchmark::State& state, std::shared_ptr<const DepthField> field,
-                          ConeKind kind) {
+void GenerateBilinearOnce(benchmark::State& state,
+                          std::shared_ptr<const DepthField> field, ConeKind kind) {
     for (auto _ : state) benchmark::DoNotOptimize(GenerateBilinearConeMap(*field, kind));
     state.SetItemsProcessed(state.iterations() * int64_t(field->width) *
                             int64_t(field->height));
@@ -67,8 +68,9 @@ void RegisterMap(const std::string& name, std::shared_ptr<const DepthField> fiel
     for (const NamedKind& k : kKinds) {
         if (!HasBilinearBounds(k.kind) || (conservativeOnly && k.kind != ConeKind::Cone))
             continue;
-        benchmark::RegisterBenchmark(("BM_ConeMapBilinear/" + name + "/" + k.name).c_str(),
-                                     GenerateBilinearOnce, field, k.kind)
+        benchmark::RegisterBenchmark(
+            ("BM_ConeMapBilinear/" + name + "/" + k.name).c_str(), GenerateBilinearOnce,
+            field, k.kind)
             ->Unit(benchmark::kMillisecond)
             ->UseRealTime()
             ->Iterations(1);

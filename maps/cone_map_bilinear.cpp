@@ -109,31 +109,35 @@ ConeMap BilinearMap(const DepthField& hf, ConeKind kind, const ConeMapParams& p,
     const auto acceptAll = [](int, int, const Offset&) { return true; };
     // R per cell and sector, as a ratio in double (+inf: unbounded).
     std::vector<double> R(size_t(W) * size_t(H) * size_t(nS));
-    tbb::parallel_for(tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
-        for (int j = r.begin(); j < r.end(); ++j)
-            for (int i = 0; i < W; ++i) {
-                const size_t at = size_t(j) * size_t(W) + size_t(i);
-                double best[kMaxSectors * 2];
-                std::fill(best, best + kMaxSectors * 2, kInfQ);
-                const float apex = cells.deepest.depth[at];
-                if (brute)
-                    BruteSearch(cells.shallowest, offs, i, j, apex, nS, best, acceptAll);
-                else
-                    TiledSearch(cells.shallowest, to, win, dmin, i, j, apex, nS, best,
-                                acceptAll);
-                // The near cells: the steepest patch of the 3x3 cells around.
-                double l2 = 0.0;
-                for (int sy = -1; sy <= 1; ++sy)
-                    for (int sx = -1; sx <= 1; ++sx)
-                        l2 = std::max(l2, cells.grad2[size_t(Wrap(j + sy, H)) * size_t(W) +
-                                                      size_t(Wrap(i + sx, W))]);
-                const double nearR = l2 > 0.0 ? 1.0 / std::sqrt(l2) : kInfQ;
-                for (int k = 0; k < nS; ++k) {
-                    const double farR = best[k] < kInfQ ? std::sqrt(best[k]) / g.scale : kInfQ;
-                    R[at * size_t(nS) + size_t(k)] = std::min(nearR, farR);
+    tbb::parallel_for(
+        tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
+            for (int j = r.begin(); j < r.end(); ++j)
+                for (int i = 0; i < W; ++i) {
+                    const size_t at = size_t(j) * size_t(W) + size_t(i);
+                    double best[kMaxSectors * 2];
+                    std::fill(best, best + kMaxSectors * 2, kInfQ);
+                    const float apex = cells.deepest.depth[at];
+                    if (brute)
+                        BruteSearch(cells.shallowest, offs, i, j, apex, nS, best,
+                                    acceptAll);
+                    else
+                        TiledSearch(cells.shallowest, to, win, dmin, i, j, apex, nS, best,
+                                    acceptAll);
+                    // The near cells: the steepest patch of the 3x3 cells around.
+                    double l2 = 0.0;
+                    for (int sy = -1; sy <= 1; ++sy)
+                        for (int sx = -1; sx <= 1; ++sx)
+                            l2 = std::max(
+                                l2, cells.grad2[size_t(Wrap(j + sy, H)) * size_t(W) +
+                                                size_t(Wrap(i + sx, W))]);
+                    const double nearR = l2 > 0.0 ? 1.0 / std::sqrt(l2) : kInfQ;
+                    for (int k = 0; k < nS; ++k) {
+                        const double farR =
+                            best[k] < kInfQ ? std::sqrt(best[k]) / g.scale : kInfQ;
+                        R[at * size_t(nS) + size_t(k)] = std::min(nearR, farR);
+                    }
                 }
-            }
-    });
+        });
     // A texel: the least R of the four cells it is a corner of.
     const int C = nS;
     ConeMap m;
@@ -152,8 +156,8 @@ ConeMap BilinearMap(const DepthField& hf, ConeKind kind, const ConeMapParams& p,
                                            size_t(Wrap(i + cx, W))) *
                                               size_t(nS) +
                                           size_t(k)]);
-                float& out = m.values[(size_t(j) * size_t(W) + size_t(i)) * size_t(C) +
-                                      size_t(k)];
+                float& out =
+                    m.values[(size_t(j) * size_t(W) + size_t(i)) * size_t(C) + size_t(k)];
                 if (kind == ConeKind::ConeNormal)
                     out = ConeNormalFromRatio(r);
                 else

@@ -572,8 +572,8 @@ class Engine {
         for (int s = 0; s < kTileW; ++s)
             for (int c = 0; c < C; ++c) {
                 const int k = (kTileH - 1) * kTileW + s;
-                seedUp_[(size_t(tileX) * kTileW + size_t(s)) * size_t(C) + size_t(c)] =
-                    {t.argX[c][k], t.argY[c][k]};
+                seedUp_[(size_t(tileX) * kTileW + size_t(s)) * size_t(C) + size_t(c)] = {
+                    t.argX[c][k], t.argY[c][k]};
             }
     }
 

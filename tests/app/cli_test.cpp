@@ -373,17 +373,21 @@ TEST(Cli, BadConeMapsAreOneError) {
     ExpectCleanFailure(
         base + "--method csm --cone-map " + flt.string() + " --cone-map-encoding u8",
         "8-bit");
-    ExpectCleanFailure(base + "--method csm --cone-bounds bilinear --cone-map " + one.string(),
-                       "--cone-bounds bilinear");
+    ExpectCleanFailure(
+        base + "--method csm --cone-bounds bilinear --cone-map " + one.string(),
+        "--cone-bounds bilinear");
     ExpectCleanFailure(base + "--method rcs --cone-bounds bilinear", "rcs");
     ExpectCleanFailure(base + "--method mcns --cone-bounds bilinear", "mcns");
-    ExpectCleanFailure(base + "--method relief --cone-bounds bilinear", "reads no cone map");
-    ExpectCleanFailure(base + "--method exact --cone-bounds bilinear", "reads no cone map");
+    ExpectCleanFailure(base + "--method relief --cone-bounds bilinear",
+                       "reads no cone map");
+    ExpectCleanFailure(base + "--method exact --cone-bounds bilinear",
+                       "reads no cone map");
     ExpectCleanFailure(base + "--method csm --cone-bounds bilinaer", "--cone-bounds");
     const fs::path out = d / "bil";
-    ASSERT_EQ(RunCli(base + "--method acm8 --cone-bounds bilinear --out " + out.string(), d)
-                  .exitCode,
-              0);
+    ASSERT_EQ(
+        RunCli(base + "--method acm8 --cone-bounds bilinear --out " + out.string(), d)
+            .exitCode,
+        0);
     EXPECT_NE(Slurp(out / "metrics.json").find("\"cone_bounds\": \"bilinear\""),
               std::string::npos);
     ExpectCleanFailure(base + "--method csm --texture-format r8 --cone-map " +

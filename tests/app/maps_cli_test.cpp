@@ -125,9 +125,10 @@ TEST(MapsCli, BilinearBoundsWriteAndRefuse) {
     // Cached apart from the texel-bound map of the same kind and field.
     const std::string cache = " --cache-dir " + (d / "c").string();
     for (const char* bounds : {"bilinear", "texel"}) {
-        const Result c = RunCli("maps --map builtin:shapes:32 --kind cone --cone-bounds " +
-                                    std::string(bounds) + cache,
-                                d);
+        const Result c =
+            RunCli("maps --map builtin:shapes:32 --kind cone --cone-bounds " +
+                       std::string(bounds) + cache,
+                   d);
         ASSERT_EQ(c.exitCode, 0) << c.err;
         EXPECT_NE(c.out.find("cache: miss"), std::string::npos) << bounds << c.out;
     }
@@ -135,10 +136,12 @@ TEST(MapsCli, BilinearBoundsWriteAndRefuse) {
                        "--cone-bounds bilinear");
     ExpectCleanFailure("--map builtin:shapes:16 --kind stacked --cone-bounds bilinear",
                        "--cone-bounds bilinear");
-    ExpectCleanFailure("--map builtin:shapes:16 --kind acm4 --adaptive --cone-bounds bilinear",
-                       "--adaptive");
-    ExpectCleanFailure("--map builtin:shapes:16 --kind cone --safety --cone-bounds bilinear",
-                       "--safety");
+    ExpectCleanFailure(
+        "--map builtin:shapes:16 --kind acm4 --adaptive --cone-bounds bilinear",
+        "--adaptive");
+    ExpectCleanFailure(
+        "--map builtin:shapes:16 --kind cone --safety --cone-bounds bilinear",
+        "--safety");
     ExpectCleanFailure("--map builtin:shapes:16 --kind cone --cone-bounds exact",
                        "--cone-bounds");
     ExpectCleanFailure("--map builtin:shapes:16 --kind maxmip --cone-bounds texel",

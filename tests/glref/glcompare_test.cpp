@@ -477,10 +477,9 @@ TEST(GlCompare, TraceCommandReproducesTheScene) {
     c.settings.maps.bounds = ConeBounds::Bilinear;
     ResolveRenderSettings(c);
     const std::string all = TraceCommand(c, 1, 2);
-    for (const char* part :
-         {"--camera ortho", "--view-dir 0.25,0,-1", "--shadow cone", "--shadow-steps 7",
-          "--shadow-penumbra ", "--ao cone", "--cone-encoding float",
-          "--cone-bounds bilinear"})
+    for (const char* part : {"--camera ortho", "--view-dir 0.25,0,-1", "--shadow cone",
+                             "--shadow-steps 7", "--shadow-penumbra ", "--ao cone",
+                             "--cone-encoding float", "--cone-bounds bilinear"})
         EXPECT_NE(all.find(part), std::string::npos) << part << " in " << all;
 }
 

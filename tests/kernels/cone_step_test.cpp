@@ -475,7 +475,8 @@ TEST(ConeFilter, BilinearBoundsNeverStepPastTheFirstHit) {
         for (const char* method : {"csm", "qcsm", "acm4", "acm8", "cns"})
             for (const char* filter : {"min4", "bilinear"})
                 for (ConeEncoding e : {ConeEncoding::Float, ConeEncoding::U8Sqrt}) {
-                    if (e != ConeEncoding::Float && std::string(method) != "csm") continue;
+                    if (e != ConeEncoding::Float && std::string(method) != "csm")
+                        continue;
                     RenderSettings s;
                     s.method = method;
                     s.width = s.height = 96;
@@ -490,16 +491,19 @@ TEST(ConeFilter, BilinearBoundsNeverStepPastTheFirstHit) {
                         ++covered;
                         if (!PastFirstHit(out.record.hitDepth[i], out.reference.depth[i]))
                             continue;
-                        const double du = double(out.record.hitU[i]) - double(out.reference.u[i]),
-                                     dv = double(out.record.hitV[i]) - double(out.reference.v[i]);
+                        const double du = double(out.record.hitU[i]) -
+                                          double(out.reference.u[i]),
+                                     dv = double(out.record.hitV[i]) -
+                                          double(out.reference.v[i]);
                         if (std::sqrt(du * du + dv * dv) <= 0x1p-22)
                             ++rounding;
                         else
                             ++past;
                     }
                     EXPECT_GT(covered, 5000);
-                    EXPECT_EQ(past, 0) << method << " on " << map << ", cone_filter="
-                                       << filter << ", " << ToString(e);
+                    EXPECT_EQ(past, 0)
+                        << method << " on " << map << ", cone_filter=" << filter << ", "
+                        << ToString(e);
                 }
     }
     EXPECT_LT(rounding, 200);

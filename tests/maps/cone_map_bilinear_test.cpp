@@ -51,9 +51,9 @@ TEST(BilinearConeMap, FastEqualsBruteForce) {
             const ConeMap fast = GenerateBilinearConeMap(hf, kind);
             const ConeMap brute = GenerateBilinearConeMapBruteForce(hf, kind);
             ASSERT_EQ(fast.values.size(), brute.values.size());
-            ASSERT_EQ(fast.channels, detail::SectorCount(kind == ConeKind::ConeNormal
-                                                             ? ConeKind::Cone
-                                                             : kind));
+            ASSERT_EQ(fast.channels,
+                      detail::SectorCount(kind == ConeKind::ConeNormal ? ConeKind::Cone
+                                                                       : kind));
             EXPECT_EQ(std::memcmp(fast.values.data(), brute.values.data(),
                                   fast.values.size() * sizeof(float)),
                       0)
@@ -73,10 +73,10 @@ DepthField Ridge() {
 
 TEST(BilinearConeMap, RidgeGivesTheClosedFormRatios) {
     // Texel T = 8 + n (n >= 3): its cells' far blockers are the cells holding the ridge
-    // (shallowest corner 0.2) n - 2 texels away across the gap, the apexes at 0.8, and the
-    // 3x3 cells around are flat: r = (n - 2) / 32 / 0.6. For n = 1, 2 a cell next to
-    // the ridge is among the 3x3 (gradient 0.6 * 32 per uv): r = 1 / (0.6 * 32), which the
-    // far cells (gap 1) give as well.
+    // (shallowest corner 0.2) n - 2 texels away across the gap, the apexes at 0.8, and
+    // the 3x3 cells around are flat: r = (n - 2) / 32 / 0.6. For n = 1, 2 a cell next to
+    // the ridge is among the 3x3 (gradient 0.6 * 32 per uv): r = 1 / (0.6 * 32), which
+    // the far cells (gap 1) give as well.
     const DepthField hf = Ridge();
     const ConeMap cone = GenerateBilinearConeMap(hf, ConeKind::Cone);
     const ConeMap acm4 = GenerateBilinearConeMap(hf, ConeKind::Acm4);
@@ -158,9 +158,9 @@ int InsideCones(const DepthField& hf, const ConeMap& m, ConeKind sectors) {
                     const double dist = std::sqrt(du * du + dv * dv);
                     // Sectors of the direction (ex, ey): SectorMask of the texel offsets
                     // scaled by S keeps the same direction.
-                    const unsigned mask =
-                        sectors == ConeKind::Cone ? 1u
-                                                  : detail::SectorMask(sectors, g, ex, ey);
+                    const unsigned mask = sectors == ConeKind::Cone
+                                              ? 1u
+                                              : detail::SectorMask(sectors, g, ex, ey);
                     for (int c = 0; c < m.channels; ++c)
                         if ((mask >> c & 1u) && dist < r[c] * (dp - dq) * (1 - 1e-9)) {
                             ++inside;
@@ -177,21 +177,21 @@ TEST(BilinearConeMap, NoSurfacePointInsideASampledCone) {
     // texel-centre maps of the same fields have such points (what min4 cannot repair).
     const DepthField fields[] = {Field(10, 10, 5, false), Field(12, 8, 6, true)};
     for (const DepthField& hf : fields) {
-        EXPECT_EQ(InsideCones(hf, GenerateBilinearConeMap(hf, ConeKind::Cone),
-                              ConeKind::Cone),
-                  0);
-        EXPECT_EQ(InsideCones(hf, GenerateBilinearConeMap(hf, ConeKind::Acm4),
-                              ConeKind::Acm4),
-                  0);
-        EXPECT_EQ(InsideCones(hf, GenerateBilinearConeMap(hf, ConeKind::Quad),
-                              ConeKind::Quad),
-                  0);
+        EXPECT_EQ(
+            InsideCones(hf, GenerateBilinearConeMap(hf, ConeKind::Cone), ConeKind::Cone),
+            0);
+        EXPECT_EQ(
+            InsideCones(hf, GenerateBilinearConeMap(hf, ConeKind::Acm4), ConeKind::Acm4),
+            0);
+        EXPECT_EQ(
+            InsideCones(hf, GenerateBilinearConeMap(hf, ConeKind::Quad), ConeKind::Quad),
+            0);
         EXPECT_GT(InsideCones(hf, GenerateConeMap(hf, ConeKind::Cone), ConeKind::Cone),
                   0);
     }
     const DepthField sq = Field(8, 8, 7, false);
-    EXPECT_EQ(InsideCones(sq, GenerateBilinearConeMap(sq, ConeKind::Acm8), ConeKind::Acm8),
-              0);
+    EXPECT_EQ(
+        InsideCones(sq, GenerateBilinearConeMap(sq, ConeKind::Acm8), ConeKind::Acm8), 0);
 }
 
 TEST(BilinearConeMap, RefusesKindsAndParametersWithoutAVariant) {
