@@ -121,6 +121,25 @@ int SectorCount(ConeKind kind) {
     }
 }
 
+namespace {
+
+/// The rays bounding closed sector k of acm4 or acm8 (counter-clockwise from +u, in the
+/// directions' space (x * H, y * W)): the sector runs from *a to *b.
+void SectorRays(ConeKind kind, int k, const int*& a, const int*& b) {
+    static constexpr int kB4[5][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}, {1, 0}};
+    static constexpr int kB8[9][2] = {{1, 0},   {1, 1},  {0, 1},  {-1, 1}, {-1, 0},
+                                      {-1, -1}, {0, -1}, {1, -1}, {1, 0}};
+    a = kind == ConeKind::Acm4 ? kB4[k] : kB8[k];
+    b = kind == ConeKind::Acm4 ? kB4[k + 1] : kB8[k + 1];
+}
+
+/// Whether the direction (vx, vy) lies in the closed wedge from ray a to ray b.
+bool InClosedWedge(const int* a, const int* b, int64_t vx, int64_t vy) {
+    return a[0] * vy - a[1] * vx >= 0 && vx * b[1] - vy * b[0] >= 0;
+}
+
+}  // namespace
+
 uint8_t SectorMask(ConeKind kind, const Geometry& g, int dx, int dy) {
     // Directions in uv space scaled by W*H: (dx * H, dy * W), exact integers.
     const int64_t vx = int64_t(dx) * g.h, vy = int64_t(dy) * g.w;
@@ -130,18 +149,12 @@ uint8_t SectorMask(ConeKind kind, const Geometry& g, int dx, int dy) {
                            (vy < 0 ? 8 : 0));
         case ConeKind::Acm4:
         case ConeKind::Acm8: {
-            static constexpr int kB4[5][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}, {1, 0}};
-            static constexpr int kB8[9][2] = {{1, 0},  {1, 1},  {0, 1},
-                                              {-1, 1}, {-1, 0}, {-1, -1},
-                                              {0, -1}, {1, -1}, {1, 0}};
             const int n = kind == ConeKind::Acm4 ? 4 : 8;
             uint8_t m = 0;
             for (int k = 0; k < n; ++k) {
-                const int* a = kind == ConeKind::Acm4 ? kB4[k] : kB8[k];
-                const int* b = kind == ConeKind::Acm4 ? kB4[k + 1] : kB8[k + 1];
-                const int64_t c1 = a[0] * vy - a[1] * vx;  // cross(a, v) >= 0
-                const int64_t c2 = vx * b[1] - vy * b[0];  // cross(v, b) >= 0
-                if (c1 >= 0 && c2 >= 0) m |= uint8_t(1u << k);
+                const int *a, *b;
+                SectorRays(kind, k, a, b);
+                if (InClosedWedge(a, b, vx, vy)) m |= uint8_t(1u << k);
             }
             return m;
         }
@@ -163,10 +176,6 @@ uint8_t CellSectorMask(ConeKind kind, const Geometry& g, int dx, int dy) {
             // A closed convex wedge and a rectangle meet iff a corner of the rectangle
             // lies in the wedge or one of the wedge's two rays meets the rectangle
             // (otherwise the rectangle, being connected, lies wholly outside).
-            static constexpr int kB4[5][2] = {{1, 0}, {0, 1}, {-1, 0}, {0, -1}, {1, 0}};
-            static constexpr int kB8[9][2] = {{1, 0},  {1, 1},  {0, 1},
-                                              {-1, 1}, {-1, 0}, {-1, -1},
-                                              {0, -1}, {1, -1}, {1, 0}};
             auto rayMeets = [&](const int* a) {
                 // t >= 0 with t * a in [x0, x1] x [y0, y1].
                 int64_t lo = 0, hi = INT64_MAX;
@@ -186,13 +195,11 @@ uint8_t CellSectorMask(ConeKind kind, const Geometry& g, int dx, int dy) {
             const int n = kind == ConeKind::Acm4 ? 4 : 8;
             uint8_t m = 0;
             for (int k = 0; k < n; ++k) {
-                const int* a = kind == ConeKind::Acm4 ? kB4[k] : kB8[k];
-                const int* b = kind == ConeKind::Acm4 ? kB4[k + 1] : kB8[k + 1];
+                const int *a, *b;
+                SectorRays(kind, k, a, b);
                 bool meets = rayMeets(a) || rayMeets(b);
-                for (int c = 0; c < 4 && !meets; ++c) {
-                    const int64_t vx = (c & 1) ? x1 : x0, vy = (c & 2) ? y1 : y0;
-                    meets = a[0] * vy - a[1] * vx >= 0 && vx * b[1] - vy * b[0] >= 0;
-                }
+                for (int c = 0; c < 4 && !meets; ++c)
+                    meets = InClosedWedge(a, b, (c & 1) ? x1 : x0, (c & 2) ? y1 : y0);
                 if (meets) m |= uint8_t(1u << k);
             }
             return m;
