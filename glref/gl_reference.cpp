@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "texture/cell_pyramid.h"
 
 #ifndef GL_TEXTURE_REDUCTION_MODE_ARB
 #define GL_TEXTURE_REDUCTION_MODE_ARB 0x9366
@@ -134,7 +135,7 @@ struct GlReference::Impl {
     bool hasBallot = false;
 
     GLuint program = 0, vao = 0, vbo = 0, ibo = 0, texture = 0, coneArray = 0, fbo = 0,
-           ssbo = 0, traceBuffer = 0, coneSampler = 0;
+           ssbo = 0, traceBuffer = 0, coneSampler = 0, pyramid = 0;
     bool tracing = false;
     static constexpr int kTraceCapacity = 4096;
     GLuint targets[3] = {0, 0, 0};
@@ -157,10 +158,11 @@ struct GlReference::Impl {
         if (texture) glDeleteTextures(1, &texture);
         if (coneArray) glDeleteTextures(1, &coneArray);
         if (coneSampler) glDeleteSamplers(1, &coneSampler);
+        if (pyramid) glDeleteTextures(1, &pyramid);
         if (fbo) glDeleteFramebuffers(1, &fbo);
         if (targets[0]) glDeleteTextures(3, targets);
         program = vao = vbo = ibo = ssbo = traceBuffer = texture = coneArray = fbo =
-            coneSampler = 0;
+            coneSampler = pyramid = 0;
         targets[0] = targets[1] = targets[2] = 0;
     }
 };
@@ -444,6 +446,27 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
         }
     }
 
+    // The hierarchical tracers' cell pyramid (texture/cell_pyramid.h): its atlas as one
+    // R32F level on unit 4, read with texelFetch (exact; research/llvmpipe.md §2.3).
+    CellPyramid pyramid;
+    if (scene.kernel.Info().readsPyramid) {
+        if (scene.sampler.wrap != WrapMode::Repeat)
+            throw Error("GL reference: kernel " + std::string(scene.kernel.Info().name) +
+                        " needs --wrap repeat");
+        pyramid = BuildCellPyramid(field);
+        glGenTextures(1, &m.pyramid);
+        glActiveTexture(GL_TEXTURE4);
+        glBindTexture(GL_TEXTURE_2D, m.pyramid);
+        glTexStorage2D(GL_TEXTURE_2D, 1, GL_R32F, pyramid.stride, pyramid.atlasHeight);
+        glTexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, pyramid.stride, pyramid.atlasHeight,
+                        GL_RED, GL_FLOAT, pyramid.atlas.data());
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_BASE_LEVEL, 0);
+        glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
+        glActiveTexture(GL_TEXTURE0);
+    }
+
     // Targets: three RGBA32F colour attachments, no depth buffer (the plane's two
     // triangles do not overlap, so the C++ depth test removes nothing).
     glGenFramebuffers(1, &m.fbo);
@@ -489,6 +512,12 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     glUniform1i(loc("uConeSquared"), scene.coneSquared ? 1 : 0);
     glUniform2f(loc("uMapSize"), float(field.width), float(field.height));
     UploadKernelUniforms(m.program, scene.kernel);
+    if (scene.kernel.Info().readsPyramid) {
+        glUniform1i(loc("uPyramid"), 4);
+        glUniform1i(loc("uPyramidTop"), pyramid.levels - 1);
+        glUniform1iv(loc("uPyramidOffset"), GLsizei(pyramid.levels),
+                     pyramid.offset.data());
+    }
     const ShadowJob& sh = scene.shadow;
     glUniform1i(loc("uShadow"), int(sh.kind));
     glUniform1i(loc("uShadowSteps"), sh.steps);

@@ -24,7 +24,8 @@
 // kReadsRatio = true` reads a cone-family map: each of its fetches returns the depth and
 // the decoded cone ratio at the same uv (one fetch of the combined texture); one with
 // `kConeLayers = n` reads an n-layer map and names the layer of each lane in Begin
-// (Fetch::layer).
+// (Fetch::layer). One with `kReadsPyramid = true` fetches nodes of the cell pyramid and
+// cell corners by index (Fetch::level, cx, cy; the hierarchical tracers).
 #pragma once
 
 #include <array>
@@ -101,6 +102,9 @@ struct KernelInfo {
     int mapLayers = 1;
     /// Its answer is where it stopped even above the surface (KernelAnswersAtStop).
     bool answersAtStop = false;
+    /// It reads the cell pyramid (texture/cell_pyramid.h; KernelReadsPyramid) and, with
+    /// it, needs a repeating height texture.
+    bool readsPyramid = false;
 };
 
 /// Parameter values by name: every parameter of the method, defaults filled in.
@@ -169,6 +173,9 @@ template <class L>
 struct Sample {
     typename L::F h, ratio;
     std::array<typename L::F, kMaxStackedCones> stack;
+    /// A kernel with `kReadsPyramid` fetching a cell's corners (Fetch::level < 0): the
+    /// texels at (i, j), (i+1, j), (i, j+1), (i+1, j+1) of cell (i, j).
+    std::array<typename L::F, 4> corners;
 };
 
 /// Whether kernel K reads a cone map with its depths.
@@ -185,6 +192,17 @@ template <class L>
 struct Fetch {
     typename L::F u, v, t;
     typename L::I layer = typename L::I(0);
+    /// Kernels with `kReadsPyramid` (the hierarchical tracers, kernels/max_mip.h) fetch
+    /// by index, not by uv (u, v, t stay the ray point, for traces): the node of `level`
+    /// holding level-0 cell (cx, cy) of the cell pyramid (texture/cell_pyramid.h), or,
+    /// for level < 0, the four corners of cell (cx, cy).
+    typename L::I level = typename L::I(0), cx = typename L::I(0), cy = typename L::I(0);
+};
+
+/// Whether kernel K reads the cell pyramid by index (kReadsPyramid).
+template <class K>
+concept KernelReadsPyramid = requires {
+    requires K::kReadsPyramid;
 };
 
 /// Whether kernel K reads every layer of its map in each fetch (the stacked cones of

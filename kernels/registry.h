@@ -15,6 +15,7 @@
 #include "kernels/cone_step.h"
 #include "kernels/kernel.h"
 #include "kernels/linear_search.h"
+#include "kernels/max_mip.h"
 #include "kernels/parallax.h"
 #include "texture/sampler.h"
 
@@ -29,7 +30,8 @@ struct KernelList {
 using KernelTypes =
     KernelList<ParallaxKernel, OffsetLimitKernel, LinearKernel, ReliefKernel,
                SecantKernel, IntervalKernel, PomKernel, CsmKernel, RcsKernel, QcsmKernel,
-               Acm4Kernel, Acm8Kernel, CnsKernel, RcnsKernel, McnsKernel>;
+               Acm4Kernel, Acm8Kernel, CnsKernel, RcnsKernel, McnsKernel, MaxMipKernel,
+               QdmKernel>;
 
 using MethodInfo = KernelInfo;
 using ParamDef = ParamSpec;

@@ -63,6 +63,13 @@ ConeEncoding KernelMapEncoding(const Kernel& kernel, const KernelMapSettings& ma
 
 void ValidateKernelMaps(const Kernel& kernel, const SamplerState& sampler,
                         const KernelMapSettings& maps) {
+    if (kernel.Info().readsPyramid && sampler.wrap != WrapMode::Repeat)
+        throw Error(ParamName("method") + " " + std::string(kernel.Info().name) +
+                    " with " + ParamName("wrap") + " " +
+                    std::string(ToString(sampler.wrap)) +
+                    ": its cell pyramid tiles the texture (cells between texel centres "
+                    "wrap around); use " +
+                    ParamName("wrap") + " repeat");
     if (kernel.Info().maps.empty()) return;
     const Filter coneFilter = KernelConeFilter(kernel, sampler.filter);
     if (sampler.precision == Precision::Llvmpipe8 && coneFilter != sampler.filter)
@@ -264,6 +271,10 @@ Textures BindKernelTextures(const DepthField& field, const SamplerState& sampler
                             bool* cacheHit) {
     Textures t = BindTextures(field, sampler);
     if (cacheHit) *cacheHit = false;
+    if (kernel.Info().readsPyramid) {
+        ValidateKernelMaps(kernel, sampler, maps);
+        t.pyramid = std::make_shared<const CellPyramid>(BuildCellPyramid(field));
+    }
     if (kernel.Info().maps.empty()) return t;
     ValidateKernelMaps(kernel, sampler, maps);
     const bool squared = KernelMapEncoding(kernel, maps) == ConeEncoding::U8Sqrt;

@@ -139,6 +139,9 @@ RS_INLINE void TripPack(const typename K::Params& params, const BatchJob& job,
         sampled.h = SampleHeightConeStackLanes<L, kLayers>(
             tex, p.fetch.u, p.fetch.v, I(0), p.active, p.texels, sampled.stack.data());
         sampled.ratio = sampled.stack[0];
+    } else if constexpr (KernelReadsPyramid<K>) {
+        SamplePyramidLanes<L>(tex, p.fetch.level, p.fetch.cx, p.fetch.cy, p.active,
+                              p.texels, sampled.h, sampled.corners);
     } else if constexpr (KernelReadsRatio<K>)
         sampled.h = SampleHeightConeLanes<L>(tex, p.fetch.u, p.fetch.v, p.fetch.layer,
                                              p.active, p.texels, sampled.ratio);

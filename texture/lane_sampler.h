@@ -10,9 +10,11 @@
 // texel counts are added per fetch.
 #pragma once
 
+#include <array>
 #include <memory>
 
 #include "kernels/lanes.h"
+#include "texture/cell_pyramid.h"
 #include "texture/padded_texels.h"
 #include "texture/sampler.h"
 
@@ -43,6 +45,9 @@ struct Textures {
     /// equal). When it differs from `sampler.filter` a fetch samples the ratio with its
     /// own footprint: a second texture call on the GL side.
     Filter coneFilter = Filter::Bilinear;
+    /// The hierarchical tracers' cell pyramid (kernels/kernel.h kReadsPyramid), of
+    /// `depth`; null for the other kernels.
+    std::shared_ptr<const CellPyramid> pyramid;
 };
 
 /// Binds the ratio channel `layers` (each the depth's size; at least one) to `t`, padded
@@ -84,6 +89,11 @@ struct LaneTextures {
     /// How the x86 units read a bilinear footprint (FootprintLoads()): gathers of texel
     /// pairs, or paired 64-bit loads. The same texels either way.
     bool gatherFootprints = false;
+    /// The cell pyramid's atlas (Textures::pyramid; null without one).
+    const float* pyramid = nullptr;
+    int64_t pyramidCount = 0;
+    int pyramidStride = 0;
+    const int* pyramidOffset = nullptr;  ///< per level: its first atlas column
 };
 
 /// How the lane units read footprints on this CPU: true = 64-bit pair gathers
@@ -114,6 +124,13 @@ inline LaneTextures BindLanes(const Textures& t) {
         b.padded = t.padded->texels.data();
         b.paddedCount = t.padded->Count();
         b.stride = t.padded->stride;
+    }
+    if (t.pyramid) {
+        RS_CHECK(t.pyramid->width == b.width && t.pyramid->height == b.height);
+        b.pyramid = t.pyramid->atlas.data();
+        b.pyramidCount = int64_t(t.pyramid->atlas.size());
+        b.pyramidStride = t.pyramid->stride;
+        b.pyramidOffset = t.pyramid->offset.data();
     }
     if (!t.cone.empty()) {
         for (const auto& layer : t.cone)
@@ -637,6 +654,52 @@ RS_INLINE typename L::F SampleHeightConeLanes(
     const typename L::I& layer, const typename L::M& active, typename L::F& texelReads,
     typename L::F& ratio) {
     return SampleHeightConeStackLanes<L, 1>(tex, u, v, layer, active, texelReads, &ratio);
+}
+
+/// One fetch per active lane of the hierarchical tracers (kernels/kernel.h
+/// kReadsPyramid; the twin's max_mip.glsl): for `level` >= 0 the node of that level
+/// holding level-0 cell (cx, cy) from the cell pyramid's atlas (one texel: texelFetch),
+/// returned in h; for level < 0 the four corners of cell (cx, cy), the texels
+/// (cx, cy), (cx+1, cy), (cx, cy+1), (cx+1, cy+1) wrapped (repeat), in `corners`
+/// (four texels: the twin's four texelFetch calls, one fetch), with their minimum in
+/// h. Cell indices are in [0, W) x [0, H).
+template <class L>
+RS_INLINE void SamplePyramidLanes(const LaneTextures& tex, const typename L::I& level,
+                                  const typename L::I& cx, const typename L::I& cy,
+                                  const typename L::M& active, typename L::F& texelReads,
+                                  typename L::F& h,
+                                  std::array<typename L::F, 4>& corners) {
+    RS_DCHECK(tex.pyramid != nullptr);
+    h = typename L::F(0.0f);
+    corners.fill(typename L::F(0.0f));
+    const float* depth = tex.field->depth.data();
+    const int W = tex.width, H = tex.height;
+    for (int k = 0; k < L::kWidth; ++k) {
+        const int i = cx[k], j = cy[k], l = level[k];
+        RS_DCHECK(i >= 0 && i < W && j >= 0 && j < H);
+        if (l >= 0) {
+            const int64_t at =
+                int64_t(j >> l) * tex.pyramidStride + tex.pyramidOffset[l] + (i >> l);
+            RS_DCHECK(at >= 0 && at < tex.pyramidCount);
+            const float d = tex.pyramid[at];
+            h[k] = d;
+            for (auto& c : corners) c[k] = d;  // a node reads as a flat cell at its depth
+            if (active[k]) texelReads[k] = texelReads[k] + 1.0f;
+        } else {
+            const int i1 = i + 1 == W ? 0 : i + 1, j1 = j + 1 == H ? 0 : j + 1;
+            const size_t r0 = size_t(j) * size_t(W), r1 = size_t(j1) * size_t(W);
+            const float c00 = depth[r0 + size_t(i)], c10 = depth[r0 + size_t(i1)];
+            const float c01 = depth[r1 + size_t(i)], c11 = depth[r1 + size_t(i1)];
+            corners[0][k] = c00;
+            corners[1][k] = c10;
+            corners[2][k] = c01;
+            corners[3][k] = c11;
+            // min as the twin's ternaries: a < b ? a : b
+            const float m0 = c00 < c10 ? c00 : c10, m1 = c01 < c11 ? c01 : c11;
+            h[k] = m0 < m1 ? m0 : m1;
+            if (active[k]) texelReads[k] = texelReads[k] + 4.0f;
+        }
+    }
 }
 
 }  // namespace reliefsim

@@ -198,6 +198,8 @@ TEST(GlCompare, SamplerModesParametersAndViewsAreBitIdentical) {
     for (const KernelInfo* info : Methods()) {
         const KernelInfo& m = *info;
         for (const Variant& v : variants) {
+            // The hierarchical tracers refuse clamp (MaxMip.ClampWrapIsOneError).
+            if (m.readsPyramid && v.wrap != WrapMode::Repeat) continue;
             SCOPED_TRACE(std::string(m.name) + " on " + v.map + " filter " +
                          std::string(ToString(v.filter)) + " wrap " +
                          std::string(ToString(v.wrap)) + " " +

@@ -90,6 +90,8 @@ TEST(LaneWidth, EveryWidthRendersTheSameFrame) {
     };
     for (const KernelInfo* m : Methods()) {
         for (const Variant& v : variants) {
+            // The hierarchical tracers refuse clamp (MaxMip.ClampWrapIsOneError).
+            if (m->readsPyramid && v.wrap != WrapMode::Repeat) continue;
             RenderSettings s;
             s.method = std::string(m->name);
             s.set = v.set;

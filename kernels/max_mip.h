@@ -1,0 +1,341 @@
+// The hierarchical tracers over the cell pyramid (texture/cell_pyramid.h): maximum-mipmap
+// traversal with an exact ray/bilinear-patch hit (Tevs, Ihrke & Seidel 2008, "Maximum
+// Mipmaps for Fast, Accurate, and Scalable Dynamic Height Field Rendering") and quadtree
+// displacement mapping (Drobot 2009, "Quadtree Displacement Mapping with Height
+// Blending", GPU Pro). Two methods, one source: MaxMip<kExact>. docs/methods/maxmip.md
+// and docs/methods/qdm.md.
+//
+// Cell space: x = u W - 0.5, y = v H - 0.5, so cell (i, j) = [i, i+1) x [j, j+1) lies
+// between four texel centres and the bilinear surface over it interpolates its corners.
+// The ray is X(t) = x0 + ax t, Y(t) = y0 + ay t with x0 = uEntry W - 0.5, ax = du W (and
+// so for y), t its depth; in a cell the patch test takes the ray's offsets from the
+// cell's corner as (uEntry W - (cell + 0.5)) + ax t, which keeps their rounding at the
+// scale of the travel, not of the map coordinate. The state holds the ray depth t, the level k with its node
+// size s = 2^k, and the level-0 cell (cx, cy) in [0, W) x [0, H) of the tile whose
+// origin is (tileX, tileY) in cell units (tiles repeat: the pyramid is built for --wrap
+// repeat). The current node is the level-k node holding (cx, cy): cells [nx, ex) with
+// nx = floor(cx / s) s, ex = min(nx + s, W), and likewise in y.
+//
+// One trip = one fetch = one iteration:
+//   fetch the node's least depth d; the ray leaves the node's column at
+//     tExit = min over the axes of (boundary - x0) / ax   (the boundary ahead: tileX + ex
+//     when ax > 0, tileX + nx when ax < 0; none when ax = 0)
+//   tTop = max(t, d): where the ray reaches the node's top (the surface in the node is no
+//     shallower than d, so nothing before tTop is hit).
+//   tTop <= tExit, k > 0: descend: t = tTop, k = k - 1, (cx, cy) = the cell under the ray
+//     point, never behind the current cell along the ray's motion (Ahead: a point on a
+//     border, or rounded back across one, takes the cell ahead, so the traversal never
+//     returns to a node it left), clamped into the node (the child lies inside the
+//     parent);
+//   tTop <= tExit, k = 0: the cell's box is entered:
+//     maxmip fetches the cell's four corners instead of its pyramid value (one fetch, four
+//       texels; d = their minimum) and intersects the ray with the bilinear patch on
+//       [tTop, tExit]: S(a, b) = c00 + g a + h b + k' a b, a, b the ray's offsets in the
+//       cell, g = c10 - c00, h = c01 - c00, k' = c00 - c10 - c01 + c11. With s = t - tTop,
+//       S - t = alpha s^2 + beta s + gamma (alpha = k' ax ay, beta = g ax + h ay +
+//       k' (a0 ay + b0 ax) - 1, gamma = S(a0, b0) - tTop): the least root s in
+//       [0, tExit - tTop] (gamma <= 0: s = 0; alpha = 0: -gamma / beta; else the stable
+//       quadratic roots q = -(beta + sign(beta) sqrt(disc)) / 2, q / alpha and
+//       gamma / q) is the first hit, exact up to float rounding. No root: cross.
+//     qdm stops at the box's top, t = tTop (Drobot's descent ends on the finest level;
+//       the point lies on or above the bilinear surface, at most one cell's relief
+//       above it);
+//   otherwise cross: t = tExit, (cx, cy) = the first cell of the neighbour node across
+//     the boundary the ray leaves by (x first on a tie; wrapping to the next tile), the
+//     other index the cell under the ray point (Ahead) clamped into the node, and k =
+//     min(k + 1,
+//     top) (Tevs: up one level after every crossing, so the traversal climbs back over
+//     empty space).
+// The search starts at the top node (one node over the tile) at t = 0 and ends at the
+// hit, at t >= 1 (no hit: cannot happen on exact values, kept for rounding) or after
+// max_steps trips. Every point it visits lies above the bilinear surface until the hit
+// (the node boxes bound it), so a lane stopped early answers a conservative point
+// (kAnswersAtStop). Fixed loops (early_exit = 0): a finished lane keeps fetching its last
+// node up to max_steps trips, result latched.
+//
+// Cell indices and levels are small integers kept exactly in float lanes (lanes.h); all
+// comparisons are exact, and the GLSL twin (kernels/glsl/max_mip.glsl) computes the same
+// float operations in the same order.
+#pragma once
+
+#include <array>
+
+#include "kernels/kernel.h"
+
+namespace reliefsim {
+
+namespace detail {
+
+template <bool kExact>
+struct MaxMipPreset;
+template <>
+struct MaxMipPreset<true> {
+    static constexpr std::string_view
+        kName = "maxmip",
+        kTitle = "maximum-mipmap traversal with an exact bilinear-patch hit",
+        kSource = "Tevs, Ihrke & Seidel 2008 (I3D), maximum mipmaps";
+};
+template <>
+struct MaxMipPreset<false> {
+    static constexpr std::string_view kName = "qdm",
+                                      kTitle = "quadtree displacement mapping",
+                                      kSource = "Drobot 2009 (GPU Pro), quadtree "
+                                                "displacement mapping";
+};
+
+inline constexpr ParamSpec kMaxStepsParam = {
+    "max_steps", 512,   1, 65535, true, "most traversal iterations (one fetch each)",
+    "uMaxSteps"};
+
+}  // namespace detail
+
+template <bool kExact>
+struct MaxMip {
+    using Preset = detail::MaxMipPreset<kExact>;
+    static constexpr bool kReadsPyramid = true;
+    static constexpr bool kAnswersAtStop = true;
+    static constexpr std::array<ParamSpec, 3> kParams = {detail::kMaxStepsParam,
+                                                         kEarlyExitParam, kBudgetParam};
+    static constexpr std::array<GlslConstant, 1> kGlslConstants = {
+        GlslConstant{"uExactPatch", kExact ? 1 : 0}};
+
+    static const KernelInfo& Info() {
+        static const KernelInfo info{Preset::kName,
+                                     Preset::kTitle,
+                                     Preset::kSource,
+                                     kParams,
+                                     {},
+                                     "max_mip.glsl",
+                                     kGlslConstants,
+                                     "",
+                                     1,
+                                     kAnswersAtStop,
+                                     kReadsPyramid};
+        return info;
+    }
+
+    struct Params {
+        int maxSteps = 512;
+        bool earlyExit = true;
+    };
+    static Params FromValues(const ParamValues& v) {
+        Params p;
+        p.maxSteps = int(ParamValue(v, kParams, "max_steps"));
+        p.earlyExit = ParamValue(v, kParams, "early_exit") != 0.0;
+        return p;
+    }
+
+    /// The top level of a W x H cell pyramid (texture/cell_pyramid.h: halving with
+    /// ceil until 1x1).
+    static int TopLevel(int w, int h) {
+        int k = 0;
+        while (w > 1 || h > 1) w = (w + 1) / 2, h = (h + 1) / 2, ++k;
+        return k;
+    }
+
+    template <class L>
+    struct State {
+        using F = typename L::F;
+        F xr, yr;              // uEntry W, vEntry H
+        F x0, y0, ax, ay;      // the ray in cell space
+        F t;                   // its depth
+        F level, size;         // the current node's level and 2^level
+        F cx, cy;              // the level-0 cell in the tile
+        F tileX, tileY;        // the tile's origin in cells
+        F nCoarse;
+        float top = 0.0f;      // the top level
+        typename L::M hit, done;
+    };
+
+    /// The fetch of the state's current node (maxmip: the corners at level 0).
+    template <class L>
+    RS_INLINE static void NodeFetch(const LaneRay<L>& ray, const State<L>& s,
+                                    Fetch<L>& f) {
+        using F = typename L::F;
+        using I = typename L::I;
+        f.t = s.t;
+        f.u = ray.U(s.t);
+        f.v = ray.V(s.t);
+        F level = s.level;
+        if constexpr (kExact) level = Select(s.level == F(0.0f), F(-1.0f), s.level);
+        f.level = stdx::static_simd_cast<I>(level);
+        f.cx = stdx::static_simd_cast<I>(s.cx);
+        f.cy = stdx::static_simd_cast<I>(s.cy);
+    }
+
+    /// The first cell index and tile origin of cell coordinate x in a tile of n cells.
+    template <class F>
+    RS_INLINE static void CellOf(const F& x, float n, F& cell, F& tile) {
+        const F fx = stdx::floor(x);
+        tile = stdx::floor(fx / F(n)) * F(n);
+        cell = fx - tile;
+        cell = Select(cell > F(n - 1.0f), F(n - 1.0f), cell);
+        cell = Select(cell < F(0.0f), F(0.0f), cell);
+    }
+
+    template <class L>
+    static void Begin(const Params&, const LaneRay<L>& ray, State<L>& s,
+                      Fetch<L>& first) {
+        using F = typename L::F;
+        const F zero(0.0f);
+        const float W = ray.mapW, H = ray.mapH;
+        s.xr = ray.uEntry * F(W);
+        s.yr = ray.vEntry * F(H);
+        s.x0 = s.xr - F(0.5f);
+        s.y0 = s.yr - F(0.5f);
+        s.ax = ray.du * F(W);
+        s.ay = ray.dv * F(H);
+        s.t = zero;
+        s.top = float(TopLevel(int(W), int(H)));
+        s.level = F(s.top);
+        s.size = F(float(1 << TopLevel(int(W), int(H))));
+        CellOf(s.x0, W, s.cx, s.tileX);
+        CellOf(s.y0, H, s.cy, s.tileY);
+        s.nCoarse = zero;
+        s.hit = s.done = typename L::M(false);
+        NodeFetch(ray, s, first);
+    }
+
+    /// c clamped to [lo, hi].
+    template <class F>
+    RS_INLINE static F Clamp(const F& c, const F& lo, const F& hi) {
+        return Select(c < lo, lo, Select(c > hi, hi, c));
+    }
+
+    /// The cell under the ray point p on an axis the ray moves along by a, never behind
+    /// the state's cell c: the ray's cell index only grows (a > 0) or shrinks (a < 0),
+    /// so a point on a cell border, or rounded back across one, takes the cell ahead.
+    template <class F>
+    RS_INLINE static F Ahead(const F& p, const F& c, const F& a) {
+        const F zero(0.0f);
+        return Select(a > zero, MaxSse(p, c), Select(a < zero, MinSse(p, c), p));
+    }
+
+    template <class L>
+    RS_INLINE static typename L::M Step(const Params& p, const LaneRay<L>& ray,
+                                        State<L>& s, const Sample<L>& x,
+                                        const typename L::M& active, Fetch<L>& next) {
+        using F = typename L::F;
+        using M = typename L::M;
+        const F zero(0.0f), one(1.0f), big(3.0e38f);
+        const F W(ray.mapW), H(ray.mapH);
+        Assign(active, s.nCoarse, s.nCoarse + one);
+        const M work = active && !s.done;
+        if (Any(work)) {
+            // The current node's cells and the depth where the ray leaves its column.
+            const F nx = stdx::floor(s.cx / s.size) * s.size;
+            const F ny = stdx::floor(s.cy / s.size) * s.size;
+            const F ex = MinSse(nx + s.size, W), ey = MinSse(ny + s.size, H);
+            const F bx = Select(s.ax > zero, s.tileX + ex, s.tileX + nx);
+            const F by = Select(s.ay > zero, s.tileY + ey, s.tileY + ny);
+            const F tx = Select(s.ax != zero, (bx - s.x0) / s.ax, big);
+            const F ty = Select(s.ay != zero, (by - s.y0) / s.ay, big);
+            const M xFirst = tx <= ty;
+            const F tExit = Select(xFirst, tx, ty);
+            const F tTop = MaxSse(s.t, x.h);
+            const M into = tTop <= tExit;
+            const M finest = work && (s.level == zero);
+            M found = finest && into;
+            F tHit = tTop;
+            if constexpr (kExact) {
+                if (Any(found)) {
+                    // The bilinear patch over cell (cx, cy) against the ray on [tTop,
+                    // tExit] (see the file comment; the twin's PatchHit).
+                    const F c00 = x.corners[0], c10 = x.corners[1];
+                    const F c01 = x.corners[2], c11 = x.corners[3];
+                    // The offsets in the cell, from the entry's offset to the cell's
+                    // corner (exact for power-of-two sizes) plus the travel: rounded
+                    // once at the travel's magnitude, not at the map coordinate's.
+                    const F a0 = (s.xr - ((s.tileX + s.cx) + F(0.5f))) + s.ax * tTop;
+                    const F b0 = (s.yr - ((s.tileY + s.cy) + F(0.5f))) + s.ay * tTop;
+                    const F g = c10 - c00, h = c01 - c00;
+                    const F k = (c00 - c10) - (c01 - c11);
+                    const F alpha = (k * s.ax) * s.ay;
+                    const F beta = ((g * s.ax + h * s.ay) + k * (a0 * s.ay + b0 * s.ax)) - one;
+                    const F gamma = ((c00 + g * a0) + (h * b0 + (k * a0) * b0)) - tTop;
+                    const F sEnd = tExit - tTop;
+                    // alpha = 0: the linear root where beta < 0.
+                    const F lin = Select(beta < zero, -gamma / beta, big);
+                    const F disc = beta * beta - (F(4.0f) * alpha) * gamma;
+                    const F root = stdx::sqrt(MaxSse(disc, zero));
+                    const F q = F(-0.5f) * (beta + Select(beta >= zero, root, -root));
+                    const F r1 = Select(q != zero, q / alpha, big);
+                    const F r2 = Select(q != zero, gamma / q, big);
+                    const F s1 = Select(r1 >= zero, r1, big);
+                    const F s2 = Select(r2 >= zero, r2, big);
+                    const F quad = Select(disc >= zero, MinSse(s1, s2), big);
+                    const F sHit = Select(gamma <= zero, zero,
+                                          Select(alpha == zero, lin, quad));
+                    found = found && (sHit <= sEnd);
+                    tHit = tTop + sHit;
+                }
+            }
+            const M descend = work && into && (s.level > zero);
+            const M cross = work && !descend && !found;
+            Assign(found, s.t, tHit);
+            s.hit = s.hit || found;
+            s.done = s.done || found;
+            if (Any(descend)) {
+                Assign(descend, s.t, tTop);
+                Assign(descend, s.level, s.level - one);
+                Assign(descend, s.size, s.size * F(0.5f));
+                const F px = Ahead(stdx::floor(s.x0 + s.ax * s.t) - s.tileX, s.cx, s.ax);
+                const F py = Ahead(stdx::floor(s.y0 + s.ay * s.t) - s.tileY, s.cy, s.ay);
+                Assign(descend, s.cx, Clamp(px, nx, ex - one));
+                Assign(descend, s.cy, Clamp(py, ny, ey - one));
+            }
+            if (Any(cross)) {
+                Assign(cross, s.t, MaxSse(s.t, tExit));
+                const F px = Ahead(stdx::floor(s.x0 + s.ax * s.t) - s.tileX, s.cx, s.ax);
+                const F py = Ahead(stdx::floor(s.y0 + s.ay * s.t) - s.tileY, s.cy, s.ay);
+                // Across x: the neighbour's first cell, wrapping into the next tile.
+                const M acrossX = cross && xFirst, acrossY = cross && !xFirst;
+                F cx = Select(s.ax > zero, ex, nx - one);
+                const M wrapUp = acrossX && (cx > W - one), wrapDown = acrossX && (cx < zero);
+                Assign(wrapUp, cx, cx - W);
+                Assign(wrapUp, s.tileX, s.tileX + W);
+                Assign(wrapDown, cx, cx + W);
+                Assign(wrapDown, s.tileX, s.tileX - W);
+                F cy = Select(s.ay > zero, ey, ny - one);
+                const M wrapUpY = acrossY && (cy > H - one),
+                        wrapDownY = acrossY && (cy < zero);
+                Assign(wrapUpY, cy, cy - H);
+                Assign(wrapUpY, s.tileY, s.tileY + H);
+                Assign(wrapDownY, cy, cy + H);
+                Assign(wrapDownY, s.tileY, s.tileY - H);
+                Assign(acrossX, s.cx, cx);
+                Assign(acrossX, s.cy, Clamp(py, ny, ey - one));
+                Assign(acrossY, s.cy, cy);
+                Assign(acrossY, s.cx, Clamp(px, nx, ex - one));
+                const M up = cross && (s.level < F(s.top));
+                Assign(up, s.level, s.level + one);
+                Assign(up, s.size, s.size * F(2.0f));
+                // Below the bottom without a hit (rounding only): stop there.
+                s.done = s.done || (cross && (s.t >= one));
+            }
+        }
+        s.done = s.done || (active && (s.nCoarse >= F(float(p.maxSteps))));
+        const M more = p.earlyExit ? active && !s.done
+                                   : active && (s.nCoarse < F(float(p.maxSteps)));
+        NodeFetch(ray, s, next);
+        return more;
+    }
+
+    template <class L>
+    static void End(const Params&, const LaneRay<L>& ray, const State<L>& s,
+                    LaneOutcome<L>& out) {
+        using F = typename L::F;
+        const F t = MinSse(s.t, F(1.0f));
+        out.u = ray.U(t);
+        out.v = ray.V(t);
+        out.depth = t;
+        out.nCoarse = s.nCoarse;
+        out.nRefine = F(0.0f);
+        out.hit = s.hit;
+    }
+};
+
+using MaxMipKernel = MaxMip<true>;
+using QdmKernel = MaxMip<false>;
+
+}  // namespace reliefsim
