@@ -194,8 +194,9 @@ struct Fetch {
     typename L::I layer = typename L::I(0);
     /// Kernels with `kReadsPyramid` (the hierarchical tracers, kernels/max_mip.h) fetch
     /// by index, not by uv (u, v, t stay the ray point, for traces): the node of `level`
-    /// holding level-0 cell (cx, cy) of the cell pyramid (texture/cell_pyramid.h), or,
-    /// for level < 0, the four corners of cell (cx, cy).
+    /// holding level-0 cell (cx, cy) of the cell pyramid (texture/cell_pyramid.h); for
+    /// level -1 the four corners of cell (cx, cy); for level -2 the height at (u, v)
+    /// with the height sampler, as every other kernel fetches.
     typename L::I level = typename L::I(0), cx = typename L::I(0), cy = typename L::I(0);
 };
 

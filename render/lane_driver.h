@@ -142,6 +142,13 @@ RS_INLINE void TripPack(const typename K::Params& params, const BatchJob& job,
     } else if constexpr (KernelReadsPyramid<K>) {
         SamplePyramidLanes<L>(tex, p.fetch.level, p.fetch.cx, p.fetch.cy, p.active,
                               p.texels, sampled.h, sampled.corners);
+        // Level -2: a height fetch at (u, v) with the height sampler (qdm's bracket and
+        // refinement).
+        const M height =
+            p.active && (stdx::static_simd_cast<F>(p.fetch.level) == F(-2.0f));
+        if (Any(height))
+            Assign(height, sampled.h,
+                   SampleHeightLanes<L>(tex, p.fetch.u, p.fetch.v, height, p.texels));
     } else if constexpr (KernelReadsRatio<K>)
         sampled.h = SampleHeightConeLanes<L>(tex, p.fetch.u, p.fetch.v, p.fetch.layer,
                                              p.active, p.texels, sampled.ratio);

@@ -24,14 +24,15 @@ CellPyramid BuildCellPyramid(const DepthField& field) {
     }
     p.levels = int(p.levelWidth.size());
     if (p.levels > kMaxPyramidLevels)
-        throw Error("height field \"" + field.name + "\": " + std::to_string(field.width) +
-                    "x" + std::to_string(field.height) +
+        throw Error("height field \"" + field.name + "\": " +
+                    std::to_string(field.width) + "x" + std::to_string(field.height) +
                     " needs more than 16 pyramid levels (at most 32768 texels a side)");
     p.atlasHeight = field.height;
     p.atlas.assign(size_t(p.stride) * size_t(p.atlasHeight),
                    std::numeric_limits<float>::infinity());
     auto at = [&](int level, int i, int j) -> float& {
-        return p.atlas[size_t(j) * size_t(p.stride) + size_t(p.offset[size_t(level)] + i)];
+        return p
+            .atlas[size_t(j) * size_t(p.stride) + size_t(p.offset[size_t(level)] + i)];
     };
     const int W = field.width, H = field.height;
     for (int j = 0; j < H; ++j) {

@@ -29,9 +29,9 @@ struct CellPyramid {
     int levels = 0;             ///< level count; the top, levels - 1, is 1x1
     std::vector<int> offset;    ///< per level: its first atlas column
     std::vector<int> levelWidth, levelHeight;
-    int stride = 0;             ///< atlas width (sum of the level widths)
-    int atlasHeight = 0;        ///< = height
-    std::vector<float> atlas;   ///< stride * atlasHeight minimum depths (unused: +inf)
+    int stride = 0;            ///< atlas width (sum of the level widths)
+    int atlasHeight = 0;       ///< = height
+    std::vector<float> atlas;  ///< stride * atlasHeight minimum depths (unused: +inf)
 
     float At(int level, int i, int j) const {
         return atlas[size_t(j) * size_t(stride) + size_t(offset[size_t(level)] + i)];

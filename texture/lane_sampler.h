@@ -662,7 +662,8 @@ RS_INLINE typename L::F SampleHeightConeLanes(
 /// returned in h; for level < 0 the four corners of cell (cx, cy), the texels
 /// (cx, cy), (cx+1, cy), (cx, cy+1), (cx+1, cy+1) wrapped (repeat), in `corners`
 /// (four texels: the twin's four texelFetch calls, one fetch), with their minimum in
-/// h. Cell indices are in [0, W) x [0, H).
+/// h. Cell indices are in [0, W) x [0, H). Lanes with level -2 read nothing here (the
+/// driver samples the height for them: SampleHeightLanes).
 template <class L>
 RS_INLINE void SamplePyramidLanes(const LaneTextures& tex, const typename L::I& level,
                                   const typename L::I& cx, const typename L::I& cy,
@@ -685,7 +686,7 @@ RS_INLINE void SamplePyramidLanes(const LaneTextures& tex, const typename L::I& 
             h[k] = d;
             for (auto& c : corners) c[k] = d;  // a node reads as a flat cell at its depth
             if (active[k]) texelReads[k] = texelReads[k] + 1.0f;
-        } else {
+        } else if (l == -1) {
             const int i1 = i + 1 == W ? 0 : i + 1, j1 = j + 1 == H ? 0 : j + 1;
             const size_t r0 = size_t(j) * size_t(W), r1 = size_t(j1) * size_t(W);
             const float c00 = depth[r0 + size_t(i)], c10 = depth[r0 + size_t(i1)];

@@ -30,13 +30,14 @@ DepthField Field(int w, int h, float (*depth)(int i, int j)) {
     f.height = h;
     f.depth.resize(size_t(w) * size_t(h));
     for (int j = 0; j < h; ++j)
-        for (int i = 0; i < w; ++i) f.depth[size_t(j) * size_t(w) + size_t(i)] = depth(i, j);
+        for (int i = 0; i < w; ++i)
+            f.depth[size_t(j) * size_t(w) + size_t(i)] = depth(i, j);
     f.name = "analytic";
     return f;
 }
 
 RayRun Trace(const char* method, const DepthField& f, const MarchInput& in,
-           const std::vector<std::string>& set = {}) {
+             const std::vector<std::string>& set = {}) {
     const KernelInfo& info = FindMethod(method);
     const Kernel kernel = MakeKernel(info, ResolveParams(info, set));
     KernelMapSettings maps;
@@ -108,7 +109,8 @@ TEST(MaxMip, FlatPlaneHitsExactlyAfterOneDescent) {
 TEST(MaxMip, SlantedPlaneHitIsTheClosedForm) {
     // depth = 0.1 + 0.01 i: the bilinear surface of every cell off the wrap seam is the
     // plane depth = 0.1 + 0.01 x.
-    const DepthField f = Field(64, 64, [](int i, int) { return 0.1f + 0.01f * float(i); });
+    const DepthField f =
+        Field(64, 64, [](int i, int) { return 0.1f + 0.01f * float(i); });
     std::mt19937 rng(3);
     std::uniform_real_distribution<float> u0(0.1f, 0.4f), d(-0.3f, 0.3f);
     for (int k = 0; k < 200; ++k) {
@@ -129,8 +131,7 @@ TEST(MaxMip, SlantedPlaneHitIsTheClosedForm) {
 TEST(MaxMip, StepWallIsHitOnTheBilinearRamp) {
     // Deep (0.8) left half, shallow (0.2) right half: between texel centres 31 and 32
     // the bilinear surface ramps, depth = 0.8 - 0.6 (x - 31) for x in [31, 32].
-    const DepthField f =
-        Field(64, 64, [](int i, int) { return i < 32 ? 0.8f : 0.2f; });
+    const DepthField f = Field(64, 64, [](int i, int) { return i < 32 ? 0.8f : 0.2f; });
     for (float du : {0.05f, 0.1f, 0.2f}) {
         // Enter at u = 0.4 (x = 25.1) heading +u: the ray is at depth t at x = 25.1 +
         // 64 du t and meets the ramp where 0.8 - 0.6 (x - 31) = t.
@@ -161,8 +162,7 @@ TEST(MaxMip, FixedLoopsLatchTheHitAndBudgetsStopConservatively) {
         EXPECT_EQ(fixed.result.uvHit, early.result.uvHit) << method;
         ASSERT_GT(early.counts.nFetches, 4u);
         const uint32_t budget = early.counts.nFetches / 2;
-        const RayRun cut =
-            Trace(method, f, in, {"budget=" + std::to_string(budget)});
+        const RayRun cut = Trace(method, f, in, {"budget=" + std::to_string(budget)});
         EXPECT_EQ(cut.counts.nFetches, budget) << method;
         EXPECT_TRUE(cut.result.budgetExhausted || !cut.result.hit) << method;
         EXPECT_LE(cut.result.depthHit, early.result.depthHit) << method;
@@ -202,12 +202,10 @@ TEST(MaxMip, ExactOnTheBuiltinsAndQdmNeverPastTheFirstHit) {
         int w, h;
         Precision precision;
     };
-    const Scene scenes[] = {{"shapes", 128, 128, Precision::Float},
-                            {"bumps", 128, 128, Precision::Float},
-                            {"steps", 128, 128, Precision::Float},
-                            {"noise", 128, 128, Precision::Float},
-                            {"shapes", 128, 128, Precision::Llvmpipe8},
-                            {"noise", 75, 41, Precision::Float}};
+    const Scene scenes[] = {
+        {"shapes", 128, 128, Precision::Float},     {"bumps", 128, 128, Precision::Float},
+        {"steps", 128, 128, Precision::Float},      {"noise", 128, 128, Precision::Float},
+        {"shapes", 128, 128, Precision::Llvmpipe8}, {"noise", 75, 41, Precision::Float}};
     int rounding = 0;
     for (const Scene& sc : scenes) {
         DepthField f = MakeBuiltinMap(sc.map, sc.w, sc.h);
@@ -223,8 +221,8 @@ TEST(MaxMip, ExactOnTheBuiltinsAndQdmNeverPastTheFirstHit) {
             for (size_t i = 0; i < out.record.hitDepth.size(); ++i) {
                 if (!out.record.Covered(i)) continue;
                 ++covered;
-                if (std::abs(double(out.record.hitDepth[i]) - double(out.reference.depth[i])) <=
-                    1e-4)
+                if (std::abs(double(out.record.hitDepth[i]) -
+                             double(out.reference.depth[i])) <= 1e-4)
                     ++close;
                 if (!PastFirstHit(out.record.hitDepth[i], out.reference.depth[i]))
                     continue;
@@ -234,10 +232,12 @@ TEST(MaxMip, ExactOnTheBuiltinsAndQdmNeverPastTheFirstHit) {
                     ++rounding;
                 else {
                     ++past;
-                    ADD_FAILURE() << method << " on " << sc.map << ": past the first hit at pixel " << i % 96 << "," << i / 96 << " hit "
-                                  << out.record.hitDepth[i] << " ref " << out.reference.depth[i]
-                                  << " uv " << out.record.hitU[i] << "," << out.record.hitV[i]
-                                  << " ref uv " << out.reference.u[i] << "," << out.reference.v[i];
+                    ADD_FAILURE()
+                        << method << " on " << sc.map << ": past the first hit at pixel "
+                        << i % 96 << "," << i / 96 << " hit " << out.record.hitDepth[i]
+                        << " ref " << out.reference.depth[i] << " uv "
+                        << out.record.hitU[i] << "," << out.record.hitV[i] << " ref uv "
+                        << out.reference.u[i] << "," << out.reference.v[i];
                 }
             }
             EXPECT_GT(covered, 5000);
@@ -248,4 +248,37 @@ TEST(MaxMip, ExactOnTheBuiltinsAndQdmNeverPastTheFirstHit) {
         }
     }
     EXPECT_LT(rounding, 200);
+}
+
+TEST(Qdm, RefinementInTheFinestBoxCostsTwoBracketFetchesPlusItsSteps) {
+    // On the slanted plane the finest box's top A lies above the plane and the cell's
+    // exit B below it (the ray descends faster than the plane), so the bracket holds:
+    // two height fetches (A, B), then refine_steps iterations; interval's chord of a
+    // plane is the plane's hit, binary halves the bracket per step.
+    const DepthField f =
+        Field(64, 64, [](int i, int) { return 0.1f + 0.01f * float(i); });
+    const MarchInput in{{0.25f, 0.3f}, {0.05f, 0.02f}};
+    const double exact = PlaneHit(0.1, 0.01, in.uvEntry.x, in.dirUv.x, 64);
+    const RayRun none = Trace("qdm", f, in);
+    ASSERT_TRUE(none.result.hit);
+    ASSERT_LT(none.result.depthHit, exact - 1e-4);  // the box top, above the plane
+    for (int steps : {1, 3, 6}) {
+        const RayRun b = Trace(
+            "qdm", f, in, {"refine=binary", "refine_steps=" + std::to_string(steps)});
+        EXPECT_EQ(b.result.nCoarse, none.result.nCoarse);
+        EXPECT_EQ(b.result.nRefine, steps);
+        EXPECT_EQ(b.counts.nFetches, none.counts.nFetches + 2u + uint32_t(steps));
+        // Binary after k steps lies within the bracket / 2^k of the hit.
+        // B - A is at most the ray's depth across one cell: 1 / (du W).
+        const double bracket = 1.0 / (0.05 * 64);
+        EXPECT_NEAR(b.result.depthHit, exact, bracket / double(1 << steps)) << steps;
+    }
+    const RayRun i = Trace("qdm", f, in, {"refine=interval", "refine_steps=1"});
+    EXPECT_EQ(i.result.nRefine, 1);
+    EXPECT_NEAR(i.result.depthHit, exact, 1e-6);
+    const RayRun pom = Trace("qdm", f, in, {"refine=pom"});
+    EXPECT_EQ(pom.counts.nFetches, none.counts.nFetches + 2u);  // the chord, no fetch
+    EXPECT_NEAR(pom.result.depthHit, exact, 1e-6);
+    // maxmip takes no refinement: it is exact.
+    EXPECT_THROW(ResolveParams(FindMethod("maxmip"), {"refine=binary"}), Error);
 }
