@@ -92,8 +92,12 @@ void RegisterSafetyCommand(CLI::App& root) {
     cmd->callback([a] {
         ResolveRenderSettings(a->options);
         std::vector<std::string> methods = a->methods;
-        if (methods.empty())
-            for (const KernelInfo* m : Methods()) methods.push_back(std::string(m->name));
+        if (methods
+                .empty())  // every kernel the sampler allows (maxmip, qdm: repeat only)
+            for (const KernelInfo* m : Methods())
+                if (!m->readsPyramid ||
+                    a->options.settings.sampler.wrap == WrapMode::Repeat)
+                    methods.push_back(std::string(m->name));
         for (float angle : a->angles) {
             RenderSettings s = a->options.settings;
             s.viewAngle = angle;

@@ -29,30 +29,36 @@
 //     parent);
 //   tTop <= tExit, k = 0: the cell's box is entered:
 //     maxmip fetches the cell's four corners instead of its pyramid value (one fetch,
-//     four
-//       texels; d = their minimum) and intersects the ray with the bilinear patch on
-//       [tTop, tExit]: S(a, b) = c00 + g a + h b + k' a b, a, b the ray's offsets in the
-//       cell, g = c10 - c00, h = c01 - c00, k' = c00 - c10 - c01 + c11. With s = t -
-//       tTop, S - t = alpha s^2 + beta s + gamma (alpha = k' ax ay, beta = g ax + h ay +
-//       k' (a0 ay + b0 ax) - 1, gamma = S(a0, b0) - tTop): the least root s in
-//       [0, tExit - tTop] (gamma <= 0: s = 0; alpha = 0: -gamma / beta; else the stable
-//       quadratic roots q = -(beta + sign(beta) sqrt(disc)) / 2, q / alpha and
-//       gamma / q) is the first hit, exact up to float rounding. No root: cross.
+//       four texels; d = their minimum) and intersects the ray with the bilinear patch
+//       on [tTop, tExit]: S(a, b) = c00 + g a + h b + k' a b, a, b the ray's offsets in
+//       the cell, g = c10 - c00, h = c01 - c00, k' = c00 - c10 - c01 + c11. With
+//       s = t - tTop, S - t = alpha s^2 + beta s + gamma (alpha = k' ax ay,
+//       beta = g ax + h ay + k' (a0 ay + b0 ax) - 1, gamma = S(a0, b0) - tTop): the
+//       least root s in [0, tExit - tTop] (gamma <= 0: s = 0; alpha = 0: -gamma / beta;
+//       else the stable quadratic roots q = -(beta + sign(beta) sqrt(disc)) / 2,
+//       q / alpha and gamma / q) is the first hit, exact up to float rounding. No root:
+//       cross.
 //     qdm stops at the box's top, t = tTop (Drobot's descent ends on the finest level;
 //       the point lies on or above the bilinear surface, at most one cell's relief
 //       above it);
 //   otherwise cross: t = tExit, (cx, cy) = the first cell of the neighbour node across
 //     the boundary the ray leaves by (x first on a tie; wrapping to the next tile), the
-//     other index the cell under the ray point (Ahead) clamped into the node, and k =
-//     min(k + 1,
-//     top) (Tevs: up one level after every crossing, so the traversal climbs back over
-//     empty space).
+//     other index the cell under the ray point (Ahead) clamped into the node, and
+//     k = min(k + 1, top) (Tevs: up one level after every crossing, so the traversal
+//     climbs back over empty space).
 // The search starts at the top node (one node over the tile) at t = 0 and ends at the
 // hit, at t >= 1 (no hit: cannot happen on exact values, kept for rounding) or after
 // max_steps trips. Every point it visits lies above the bilinear surface until the hit
 // (the node boxes bound it), so a lane stopped early answers a conservative point
 // (kAnswersAtStop). Fixed loops (early_exit = 0): a finished lane keeps fetching its last
 // node up to max_steps trips, result latched.
+//
+// qdm's refinement (`refine`, kernels/refine.h) runs inside the finest box: two height
+// fetches (Fetch::level -2, the height sampler) at A = the box top and B = where the ray
+// leaves the cell (at most the bottom) bracket it. A inside: A is the hit. B inside: the
+// refinement runs on [A, B] (binary from B back over B - A). B outside (the surface is
+// not crossed in this cell): the descent resumes past the cell while trips remain, else
+// A stays the answer. The bracket fetches are fetches, not iterations.
 //
 // Cell indices and levels are small integers kept exactly in float lanes (lanes.h); all
 // comparisons are exact, and the GLSL twin (kernels/glsl/max_mip.glsl) computes the same

@@ -523,3 +523,28 @@ TEST(Cli, BadAnimationsAreOneError) {
                        "--adaptive-levels");
     ExpectCleanFailure("render --animate 2 --cone-map m.png", "--cone-map");
 }
+
+// maxmip and qdm need --wrap repeat: named with clamp, one error; left to the default
+// method list of `safety`, they are left out with clamp and the others run.
+TEST(Cli, HierarchicalTracersNeedRepeatWrap) {
+    fs::path d = Scratch();
+    for (const char* method : {"maxmip", "qdm"}) {
+        Result r =
+            RunCli(std::string("render --map builtin:shapes:32 --size 16x16 --method ") +
+                       method + " --wrap clamp --out " + (d / method).string(),
+                   d);
+        EXPECT_NE(r.exitCode, 0) << method;
+        EXPECT_EQ(CountLines(r.err), 1) << r.err;
+        EXPECT_NE(r.err.find("--wrap repeat"), std::string::npos) << r.err;
+        EXPECT_FALSE(fs::exists(d / method));
+    }
+    Result r = RunCli(
+        "safety --map builtin:shapes:32 --size 16x16 --wrap clamp --angles 30 "
+        "--methods linear,relief",
+        d);
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+    r = RunCli("safety --map builtin:shapes:32 --size 16x16 --wrap clamp --angles 30", d);
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(r.out.find("maxmip"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("relief"), std::string::npos) << r.out;
+}
