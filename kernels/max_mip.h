@@ -285,6 +285,22 @@ struct MaxMip {
         return n;
     }
 
+    /// On one axis the ray moves along by a, the neighbour node's first cell across the
+    /// boundary of node cells [nx, ex): ex ahead (a > 0), nx - 1 behind, wrapped into
+    /// [0, n) with the tile's origin moved by n on lanes m.
+    template <class F, class M>
+    RS_INLINE static F NextCell(const M& m, const F& a, const F& nx, const F& ex,
+                                const F& n, F& tile) {
+        const F zero(0.0f), one(1.0f);
+        F c = Select(a > zero, ex, nx - one);
+        const M up = m && (c > n - one), down = m && (c < zero);
+        Assign(up, c, c - n);
+        Assign(up, tile, tile + n);
+        Assign(down, c, c + n);
+        Assign(down, tile, tile - n);
+        return c;
+    }
+
     /// Moves lanes m across the boundary of node n the ray leaves by, at depth tExit,
     /// into the neighbour node's first cell, one level up (see the file comment).
     template <class L>
@@ -293,25 +309,14 @@ struct MaxMip {
                                 const typename L::F& tExit) {
         using F = typename L::F;
         using M = typename L::M;
-        const F zero(0.0f), one(1.0f), W(ray.mapW), H(ray.mapH);
+        const F one(1.0f), W(ray.mapW), H(ray.mapH);
         const M xFirst = n.tx <= n.ty;
         Assign(m, s.t, MaxSse(s.t, tExit));
         const F px = Ahead(stdx::floor(s.x0 + s.ax * s.t) - s.tileX, s.cx, s.ax);
         const F py = Ahead(stdx::floor(s.y0 + s.ay * s.t) - s.tileY, s.cy, s.ay);
-        // Across x: the neighbour's first cell, wrapping into the next tile.
         const M acrossX = m && xFirst, acrossY = m && !xFirst;
-        F cx = Select(s.ax > zero, n.ex, n.nx - one);
-        const M wrapUp = acrossX && (cx > W - one), wrapDown = acrossX && (cx < zero);
-        Assign(wrapUp, cx, cx - W);
-        Assign(wrapUp, s.tileX, s.tileX + W);
-        Assign(wrapDown, cx, cx + W);
-        Assign(wrapDown, s.tileX, s.tileX - W);
-        F cy = Select(s.ay > zero, n.ey, n.ny - one);
-        const M wrapUpY = acrossY && (cy > H - one), wrapDownY = acrossY && (cy < zero);
-        Assign(wrapUpY, cy, cy - H);
-        Assign(wrapUpY, s.tileY, s.tileY + H);
-        Assign(wrapDownY, cy, cy + H);
-        Assign(wrapDownY, s.tileY, s.tileY - H);
+        const F cx = NextCell(acrossX, s.ax, n.nx, n.ex, W, s.tileX);
+        const F cy = NextCell(acrossY, s.ay, n.ny, n.ey, H, s.tileY);
         Assign(acrossX, s.cx, cx);
         Assign(acrossX, s.cy, Clamp(py, n.ny, n.ey - one));
         Assign(acrossY, s.cy, cy);

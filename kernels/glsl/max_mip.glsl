@@ -55,6 +55,19 @@ void CurrentNode(out float nx, out float ny, out float ex, out float ey, out flo
     ty = pty;
 }
 
+// MaxMip::NextCell: the neighbour node's first cell on one axis, wrapped into [0, n).
+float NextCell(float a, float nx, float ex, float n, inout float tile) {
+    precise float c = a > 0.0 ? ex : nx - 1.0;
+    if (c > n - 1.0) {
+        c = c - n;
+        tile = tile + n;
+    } else if (c < 0.0) {
+        c = c + n;
+        tile = tile - n;
+    }
+    return c;
+}
+
 // MaxMip::Cross: across the boundary the ray leaves node (nx..ey) by, at depth tExit.
 void Cross(float nx, float ny, float ex, float ey, float tx, float ty, float tExit) {
     precise float W = uMapSize.x, H = uMapSize.y;
@@ -63,26 +76,10 @@ void Cross(float nx, float ny, float ex, float ey, float tx, float ty, float tEx
     precise float px = Ahead(floor(gX0 + gAx * gT) - gTileX, gCx, gAx);
     precise float py = Ahead(floor(gY0 + gAy * gT) - gTileY, gCy, gAy);
     if (xFirst) {
-        precise float n = gAx > 0.0 ? ex : nx - 1.0;
-        if (n > W - 1.0) {
-            n = n - W;
-            gTileX = gTileX + W;
-        } else if (n < 0.0) {
-            n = n + W;
-            gTileX = gTileX - W;
-        }
-        gCx = n;
+        gCx = NextCell(gAx, nx, ex, W, gTileX);
         gCy = ClampCell(py, ny, ey - 1.0);
     } else {
-        precise float n = gAy > 0.0 ? ey : ny - 1.0;
-        if (n > H - 1.0) {
-            n = n - H;
-            gTileY = gTileY + H;
-        } else if (n < 0.0) {
-            n = n + H;
-            gTileY = gTileY - H;
-        }
-        gCy = n;
+        gCy = NextCell(gAy, ny, ey, H, gTileY);
         gCx = ClampCell(px, nx, ex - 1.0);
     }
     if (gLevel < gTop) {
