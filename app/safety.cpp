@@ -92,8 +92,8 @@ void RegisterSafetyCommand(CLI::App& root) {
     cmd->callback([a] {
         ResolveRenderSettings(a->options);
         std::vector<std::string> methods = a->methods;
-        if (methods
-                .empty())  // every kernel the sampler allows (maxmip, qdm: repeat only)
+        // Default: every kernel the sampler allows (maxmip, qdm: --wrap repeat only).
+        if (methods.empty())
             for (const KernelInfo* m : Methods())
                 if (!m->readsPyramid ||
                     a->options.settings.sampler.wrap == WrapMode::Repeat)
