@@ -66,7 +66,8 @@ ConeMap SearchMap(const DepthField& hf, ConeKind kind, const ConeMapParams& p,
 
     if (mode == Mode::Fast) {
         // The lane search (maps/cone_search.h): one pass per stacked cone, else one.
-        const int passes = kind == ConeKind::Stacked ? C : 1;
+        const int passes = (kind == ConeKind::Stacked ? C : 1) *
+                           ConeSearchPasses(sectors, hf.width, hf.height);
         ProgressCounter progress(
             p.progress, int64_t(passes) * ((hf.height + kLaneTile - 1) / kLaneTile));
         ConeSearchJob job;

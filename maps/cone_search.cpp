@@ -168,7 +168,7 @@ void MakeRipMaps(ConeSearchData& d) {
             add(0, 0, {{0, 1, 1}, {1, -1, 1}, {2, -1, -1}, {3, 1, -1}});
             break;
         case ConeKind::Acm8:
-            if (d.W != d.H) return;
+            if (d.W != d.H) return;  // (ConeSearchPasses agrees)
             // Each pair of opposite 45-degree sectors is a pair of quadrants of one
             // shear: s = X - Y for sectors 0, 4 (edges: the x axis and the diagonal), t =
             // Y - X for 1, 5, t = Y + X for 2, 6, s = X + Y for 3, 7.
@@ -186,6 +186,17 @@ void MakeRipMaps(ConeSearchData& d) {
 }  // namespace
 
 const char* ConeSearchIsa() { return Isa().name; }
+
+int ConeSearchPasses(ConeKind sectors, int W, int H) {
+    switch (sectors) {
+        case ConeKind::Acm4:
+            return 1;
+        case ConeKind::Acm8:
+            return W == H ? 4 : 1;
+        default:
+            return 1;
+    }
+}
 
 void RunConeSearch(const ConeSearchJob& job, ProgressCounter* progress) {
     const DepthField& hf = *job.field;
@@ -261,11 +272,19 @@ void RunConeSearch(const ConeSearchJob& job, ProgressCounter* progress) {
     // Bands of two tile rows: the seeds carry from row to row inside a band.
     constexpr int kBand = 2;
     const BandFn fn = Isa().fn;
-    tbb::parallel_for(tbb::blocked_range<int>(0, (tileRows + kBand - 1) / kBand, 1),
-                      [&](const tbb::blocked_range<int>& r) {
-                          for (int b = r.begin(); b < r.end(); ++b)
-                              fn(d, b * kBand, std::min(tileRows, b * kBand + kBand));
-                      });
+    // One pass per rip-map (its channels only), so that one rip-map is read at a time.
+    const int passes = d.rips.empty() ? 1 : int(d.rips.size());
+    RS_CHECK(passes == ConeSearchPasses(job.sectors, d.W, d.H));
+    for (int pass = 0; pass < passes; ++pass) {
+        d.ripPass = pass;
+        d.passChannels =
+            d.rips.empty() ? (1u << d.nChannels) - 1u : d.rips[size_t(pass)].channels;
+        tbb::parallel_for(tbb::blocked_range<int>(0, (tileRows + kBand - 1) / kBand, 1),
+                          [&](const tbb::blocked_range<int>& r) {
+                              for (int b = r.begin(); b < r.end(); ++b)
+                                  fn(d, b * kBand, std::min(tileRows, b * kBand + kBand));
+                          });
+    }
 }
 
 }  // namespace reliefsim::detail

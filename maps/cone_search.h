@@ -39,6 +39,10 @@ struct ConeSearchJob {
 /// path of GenerateConeMap; proof and measurements: docs/cone_maps.md, "The lane search".
 void RunConeSearch(const ConeSearchJob& job, ProgressCounter* progress = nullptr);
 
+/// How many passes RunConeSearch makes over the tile rows (its progress counts each
+/// pass's rows): one per rip-map (acm8 on square maps: four), else one.
+int ConeSearchPasses(ConeKind sectors, int W, int H);
+
 /// Which instruction set the lane search runs with on this CPU ("avx512", "avx2",
 /// "sse4.1"); RS_CONE_SEARCH_ISA=avx512|avx2|sse4.1 forces one (tests compare them).
 const char* ConeSearchIsa();

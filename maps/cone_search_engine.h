@@ -121,7 +121,7 @@ class Engine {
                 if (d_.rips.empty())
                     Traverse(tile);
                 else
-                    for (const auto& rip : d_.rips) TraverseRip(tile, rip);
+                    TraverseRip(tile, d_.rips[size_t(d_.ripPass)]);
             }
             Finish(tile, t);
         }
@@ -230,6 +230,34 @@ class Engine {
         return Bits(base & any);
     }
 
+    /// TexelLanes for a rip-map's texel (unwrapped (X, Y), sheared offsets d1, d2 per
+    /// lane): only the rip's channels, whose closed sectors are the sign quadrants of
+    /// (d1, d2) (SectorMask's, on the square maps that have rips).
+    uint32_t RipTexelLanes(const Tile& t, const ConeSearchData::RipMap& rip, int X, int Y,
+                           const VI& d1, const VI& d2, float b) const {
+        const VI dx = X - t.pi, dy = Y - t.pj;
+        const VI inWindow = (dx >= -g_.halfX) & (dx <= g_.halfX) & (dy >= -g_.halfY) &
+                            (dy <= g_.halfY) & (t.a > b);
+        if (!Bits(inWindow)) return 0;
+        const VF fx = ToFloat(dx), fy = ToFloat(dy);
+        const VF s = fx * fx * wx_ + fy * fy * wy_;
+        const VF dd = t.a - b;
+        const VF d2s = dd * dd;
+        const VI tiny = dd < kTiny;
+        VI any{};
+        for (uint32_t cs = rip.channels; cs; cs &= cs - 1) {
+            const int c = std::countr_zero(cs);
+            const int s1 = rip.sign1[size_t(c)], s2 = rip.sign2[size_t(c)];
+            VI member = VI{} - 1;
+            if (s1 > 0) member &= d1 >= 0;
+            if (s1 < 0) member &= d1 <= 0;
+            if (s2 > 0) member &= d2 >= 0;
+            if (s2 < 0) member &= d2 <= 0;
+            any |= member & (tiny | ~(s >= t.thr[c] * d2s));
+        }
+        return Bits(inWindow & any);
+    }
+
     /// The exact candidate of the texel at unwrapped (X, Y) for lane k.
     void Exact(Tile& t, int k, int X, int Y, float b) {
         const int dx = X - t.pi[k], dy = Y - t.pj[k];
@@ -263,6 +291,7 @@ class Engine {
         if (!n) return;
         VF bestF[kMaxSectors];
         VI bestIdx[kMaxSectors];
+        const uint32_t pass = d_.passChannels;
         for (int c = 0; c < d_.nChannels; ++c) {
             bestF[c] = VF{} + INFINITY;
             bestIdx[c] = VI{} - 1;
@@ -280,7 +309,8 @@ class Engine {
             const VF q = (fx * fx * wx_ + fy * fy * wy_) / (dd * dd);
             VI member[kMaxSectors];
             Members(dx, dy, member);
-            for (int c = 0; c < d_.nChannels; ++c) {
+            for (uint32_t cs = pass; cs; cs &= cs - 1) {
+                const int c = std::countr_zero(cs);
                 const VI better = ok & member[c] & (q < bestF[c]);
                 bestF[c] = better ? q : bestF[c];
                 bestIdx[c] = better ? (VI{} + i) : bestIdx[c];
@@ -289,7 +319,8 @@ class Engine {
         for (uint32_t lanes = t.valid; lanes; lanes &= lanes - 1) {
             const int k = std::countr_zero(lanes);
             int last = -1;
-            for (int c = 0; c < d_.nChannels; ++c) {
+            for (uint32_t cs = pass; cs; cs &= cs - 1) {
+                const int c = std::countr_zero(cs);
                 const int i = bestIdx[c][k];
                 if (i < 0 || i == last) continue;
                 last = i;
@@ -415,9 +446,10 @@ class Engine {
         int32_t cx, cy;
     };
 
-    /// The sector kinds' traversal: binary splits of rip-map cells in sheared
-    /// coordinates. A cell that straddles a lane's sector edge (c1 or c2 of the apex) is
-    /// split across it first, so the cells along an edge stay one texel wide and few.
+    /// The sector kinds' traversal: binary splits (the longer side) of rip-map cells in
+    /// sheared coordinates, where each sector the rip-map serves is a quadrant of
+    /// (c1, c2) offsets; per lane, a cell is tested against the sectors it meets from
+    /// that lane's apex only.
     void TraverseRip(Tile& t, const ConeSearchData::RipMap& rip) {
         const int W = d_.W, H = d_.H;
         const int a = rip.alpha, bt = rip.beta;
@@ -497,20 +529,15 @@ class Engine {
             if (n.lx == 0 && n.ly == 0) {
                 const int X = A0 + a * B0, Y = B0 + bt * A0;
                 const float b = DepthAt(X, Y);
-                uint32_t pass = TexelLanes(t, X, Y, b, 0) & lanes;
+                uint32_t pass = RipTexelLanes(t, rip, X, Y, lo1v, lo2v, b) & lanes;
                 for (; pass; pass &= pass - 1) Exact(t, std::countr_zero(pass), X, Y, b);
                 continue;
             }
-            // Split: across a lane's edge first (c1 then c2), else the longer side.
-            const bool straddle1 = n.lx > 0 && lo1 < 0 && hi1 > 0;
-            const bool straddle2 = n.ly > 0 && lo2 < 0 && hi2 > 0;
-            bool split1;
-            if (straddle1)
-                split1 = true;
-            else if (straddle2)
-                split1 = false;
-            else
-                split1 = n.ly == 0 || (n.lx > 0 && n.lx >= n.ly);
+            // Split the longer side. (Splitting across a lane's sector edge first, which
+            // keeps the cells along the edges one texel wide, opened 10-15% more cells:
+            // each lane's own sign test above already keeps a straddling cell from the
+            // lanes and sectors it cannot meet.)
+            const bool split1 = n.ly == 0 || (n.lx > 0 && n.lx >= n.ly);
             RipNode c0 = n, c1 = n;
             c0.lanes = c1.lanes = uint16_t(lanes);
             if (split1) {
@@ -555,6 +582,7 @@ class Engine {
                          (size_t(j) * size_t(d_.W) + size_t(i)) * size_t(d_.outStride) +
                          size_t(d_.outBase);
             for (int c = 0; c < C; ++c) {
+                if (!(d_.passChannels >> c & 1u)) continue;  // another pass's
                 const double q = t.best[c][k];
                 out[c] = d_.output == ConeSearchOutput::ConeNormal
                              ? ConeNormalFromRatio(std::sqrt(q) / g_.scale)

@@ -49,6 +49,10 @@ struct ConeSearchData {
         }
     };
     std::vector<RipMap> rips;
+    /// The rip-map this pass traverses (rips are searched one pass each, so only one
+    /// rip-map's cells are read at a time), and the channels the pass writes.
+    int ripPass = 0;
+    uint32_t passChannels = ~0u;
     ConeKind sectors = ConeKind::Cone;
     int nChannels = 1;
     bool limiting = false;
