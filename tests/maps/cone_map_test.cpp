@@ -318,11 +318,12 @@ TEST(ConeMap, RelaxedIsNeverNarrowerThanConservative) {
 }
 
 TEST(ConeMap, ProgressIsReportedInGrowingWholePercents) {
-    // The levels path, the tiled search and the relaxed search each report up to 100
-    // growing fractions ending at 1; the map does not depend on whether progress is
-    // reported.
+    // The lane search (acm8 on a square map: one pass per rip-map) and the relaxed
+    // search each report up to 100 growing fractions ending at 1; the map does not
+    // depend on whether progress is reported.
     const DepthField hf = QuantizeToUnorm8(MakeBuiltinMap("shapes", 96, 96));
-    for (ConeKind k : {ConeKind::Cone, ConeKind::Acm4, ConeKind::Relaxed}) {
+    for (ConeKind k :
+         {ConeKind::Cone, ConeKind::Acm4, ConeKind::Acm8, ConeKind::Relaxed}) {
         std::vector<double> seen;
         ConeMapParams p;
         p.searchSteps = 32;
