@@ -230,34 +230,6 @@ class Engine {
         return Bits(base & any);
     }
 
-    /// TexelLanes for a rip-map's texel (unwrapped (X, Y), sheared offsets d1, d2 per
-    /// lane): only the rip's channels, whose closed sectors are the sign quadrants of
-    /// (d1, d2) (SectorMask's, on the square maps that have rips).
-    uint32_t RipTexelLanes(const Tile& t, const ConeSearchData::RipMap& rip, int X, int Y,
-                           const VI& d1, const VI& d2, float b) const {
-        const VI dx = X - t.pi, dy = Y - t.pj;
-        const VI inWindow = (dx >= -g_.halfX) & (dx <= g_.halfX) & (dy >= -g_.halfY) &
-                            (dy <= g_.halfY) & (t.a > b);
-        if (!Bits(inWindow)) return 0;
-        const VF fx = ToFloat(dx), fy = ToFloat(dy);
-        const VF s = fx * fx * wx_ + fy * fy * wy_;
-        const VF dd = t.a - b;
-        const VF d2s = dd * dd;
-        const VI tiny = dd < kTiny;
-        VI any{};
-        for (uint32_t cs = rip.channels; cs; cs &= cs - 1) {
-            const int c = std::countr_zero(cs);
-            const int s1 = rip.sign1[size_t(c)], s2 = rip.sign2[size_t(c)];
-            VI member = VI{} - 1;
-            if (s1 > 0) member &= d1 >= 0;
-            if (s1 < 0) member &= d1 <= 0;
-            if (s2 > 0) member &= d2 >= 0;
-            if (s2 < 0) member &= d2 <= 0;
-            any |= member & (tiny | ~(s >= t.thr[c] * d2s));
-        }
-        return Bits(inWindow & any);
-    }
-
     /// The exact candidate of the texel at unwrapped (X, Y) for lane k.
     void Exact(Tile& t, int k, int X, int Y, float b) {
         const int dx = X - t.pi[k], dy = Y - t.pj[k];
@@ -527,10 +499,13 @@ class Engine {
                 Bits(meets & BoundLanes(t, X0, X1, Y0, Y1, m, thr)) & n.lanes;
             if (!lanes) continue;
             if (n.lx == 0 && n.ly == 0) {
+                // One texel (of depth m, the rip-map's level (0, 0)): the test above is
+                // TexelLanes' for it (its exact offset, and per lane the sectors that
+                // hold the offset, with the largest of their thresholds, which passes
+                // the lanes that one of them passes).
                 const int X = A0 + a * B0, Y = B0 + bt * A0;
-                const float b = DepthAt(X, Y);
-                uint32_t pass = RipTexelLanes(t, rip, X, Y, lo1v, lo2v, b) & lanes;
-                for (; pass; pass &= pass - 1) Exact(t, std::countr_zero(pass), X, Y, b);
+                for (uint32_t pass = lanes; pass; pass &= pass - 1)
+                    Exact(t, std::countr_zero(pass), X, Y, m);
                 continue;
             }
             // Split the longer side. (Splitting across a lane's sector edge first, which
