@@ -180,7 +180,7 @@ void MakeRipMaps(ConeSearchData& d) {
         default:
             return;
     }
-    for (Rip& r : d.rips) BuildRipMap(d, r);
+    // (Each rip-map is built by RunConeSearch right before its pass.)
 }
 
 }  // namespace
@@ -275,15 +275,18 @@ void RunConeSearch(const ConeSearchJob& job, ProgressCounter* progress) {
     // One pass per rip-map (its channels only), so that one rip-map is read at a time.
     const int passes = d.rips.empty() ? 1 : int(d.rips.size());
     RS_CHECK(passes == ConeSearchPasses(job.sectors, d.W, d.H));
+    // Only the pass's rip-map is held (4 W H floats): built before it, freed after.
     for (int pass = 0; pass < passes; ++pass) {
         d.ripPass = pass;
         d.passChannels =
             d.rips.empty() ? (1u << d.nChannels) - 1u : d.rips[size_t(pass)].channels;
+        if (!d.rips.empty()) BuildRipMap(d, d.rips[size_t(pass)]);
         tbb::parallel_for(tbb::blocked_range<int>(0, (tileRows + kBand - 1) / kBand, 1),
                           [&](const tbb::blocked_range<int>& r) {
                               for (int b = r.begin(); b < r.end(); ++b)
                                   fn(d, b * kBand, std::min(tileRows, b * kBand + kBand));
                           });
+        if (!d.rips.empty()) std::vector<float>().swap(d.rips[size_t(pass)].mins);
     }
 }
 
