@@ -65,7 +65,8 @@ ConeMap SearchMap(const DepthField& hf, ConeKind kind, const ConeMapParams& p,
     const int W = hf.width;
 
     if (mode == Mode::Fast) {
-        // The lane search (maps/cone_search.h): one pass per stacked cone, else one.
+        // The lane search (maps/cone_search.h): one search per stacked cone, else one,
+        // each making ConeSearchPasses passes over the tile rows.
         const int passes = (kind == ConeKind::Stacked ? C : 1) *
                            ConeSearchPasses(sectors, hf.width, hf.height);
         ProgressCounter progress(
