@@ -350,8 +350,9 @@ std::vector<T> WindowMinima(const std::vector<T>& v, int W, int H, int C, int k,
     return WindowReduce(v, W, H, C, k, step, [](T a, T b) { return std::min(a, b); });
 }
 
-std::vector<float> WindowMaxima(const std::vector<float>& v, int W, int H, int k) {
-    return WindowReduce(v, W, H, 1, k, 1,
+std::vector<float> WindowMaxima(const std::vector<float>& v, int W, int H, int k,
+                                int step) {
+    return WindowReduce(v, W, H, 1, k, step,
                         [](float a, float b) { return std::max(a, b); });
 }
 

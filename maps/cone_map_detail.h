@@ -118,8 +118,9 @@ extern template std::vector<float> WindowMinima(const std::vector<float>&, int, 
 extern template std::vector<uint16_t> WindowMinima(const std::vector<uint16_t>&, int, int,
                                                    int, int, int);
 
-/// The same with max, one channel, step 1.
-std::vector<float> WindowMaxima(const std::vector<float>& v, int W, int H, int k);
+/// The same with max, one channel.
+std::vector<float> WindowMaxima(const std::vector<float>& v, int W, int H, int k,
+                                int step = 1);
 
 /// Depth minima over the 8x8 and 32x32 windows starting at each texel (TiledSearch).
 struct SearchWindows {

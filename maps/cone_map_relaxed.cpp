@@ -239,68 +239,111 @@ float FloatAtMost(double v) {
 }
 
 /// The exit-field search window of radius (Rx, Ry) texels: its offsets (but (0, 0)) in
-/// 8x8 tiles, tiles sorted by their smallest distance to the eps-dilated cells.
+/// 8x8 tiles, the tiles in 32x32 super-tiles (4x4 tiles), each sorted by its smallest
+/// distance to the eps-dilated cells: super-tiles in `supers`, the tiles of each in
+/// `tiles[first, last)`.
+struct ExitSuper {
+    int first, last, ox, oy;
+    float minDist;
+    SectorBits mask;
+};
 struct ExitWindow {
     std::vector<ExitOffset> offs;
     std::vector<ExitTile> tiles;
+    std::vector<ExitSuper> supers;
 };
 ExitWindow MakeExitWindow(int W, int H, int Rx, int Ry, double e) {
     ExitWindow win;
     std::vector<ExitOffset>& offs = win.offs;
-    std::vector<ExitTile>& tiles = win.tiles;
-    for (int oy = -Ry; oy <= Ry; oy += kTile)
-        for (int ox = -Rx; ox <= Rx; ox += kTile) {
-            ExitTile t{int(offs.size()), 0, ox, oy, kInfF, 0};
-            for (int dy = oy; dy < std::min(oy + kTile, Ry + 1); ++dy)
-                for (int dx = ox; dx < std::min(ox + kTile, Rx + 1); ++dx) {
-                    if (dx == 0 && dy == 0) continue;
-                    const double x0 = (dx - 0.5) / W - e, x1 = (dx + 0.5) / W + e;
-                    const double y0 = (dy - 0.5) / H - e, y1 = (dy + 0.5) / H + e;
-                    const double ax = std::max({0.0, x0, -x1}),
-                                 ay = std::max({0.0, y0, -y1});
-                    const ExitOffset o{
-                        dx, dy, FloatAtMost(std::sqrt(ax * ax + ay * ay) * (1 - 1e-12)),
-                        RectSectorMask(x0, x1, y0, y1)};
-                    offs.push_back(o);
-                    t.minDist = std::min(t.minDist, o.dist);
-                    t.mask |= o.mask;
+    constexpr int kSuper = kSuperTile * kTile;
+    for (int sy = -Ry; sy <= Ry; sy += kSuper)
+        for (int sx = -Rx; sx <= Rx; sx += kSuper) {
+            ExitSuper st{int(win.tiles.size()), 0, sx, sy, kInfF, 0};
+            for (int oy = sy; oy < std::min(sy + kSuper, Ry + 1); oy += kTile)
+                for (int ox = sx; ox < std::min(sx + kSuper, Rx + 1); ox += kTile) {
+                    ExitTile t{int(offs.size()), 0, ox, oy, kInfF, 0};
+                    for (int dy = oy; dy < std::min(oy + kTile, Ry + 1); ++dy)
+                        for (int dx = ox; dx < std::min(ox + kTile, Rx + 1); ++dx) {
+                            if (dx == 0 && dy == 0) continue;
+                            const double x0 = (dx - 0.5) / W - e, x1 = (dx + 0.5) / W + e;
+                            const double y0 = (dy - 0.5) / H - e, y1 = (dy + 0.5) / H + e;
+                            const double ax = std::max({0.0, x0, -x1}),
+                                         ay = std::max({0.0, y0, -y1});
+                            const ExitOffset o{
+                                dx, dy,
+                                FloatAtMost(std::sqrt(ax * ax + ay * ay) * (1 - 1e-12)),
+                                RectSectorMask(x0, x1, y0, y1)};
+                            offs.push_back(o);
+                            t.minDist = std::min(t.minDist, o.dist);
+                            t.mask |= o.mask;
+                        }
+                    t.end = int(offs.size());
+                    if (t.end == t.begin) continue;
+                    win.tiles.push_back(t);
+                    st.minDist = std::min(st.minDist, t.minDist);
+                    st.mask |= t.mask;
                 }
-            t.end = int(offs.size());
-            if (t.end > t.begin) tiles.push_back(t);
+            st.last = int(win.tiles.size());
+            if (st.last == st.first) continue;
+            std::stable_sort(win.tiles.begin() + st.first, win.tiles.end(),
+                             [](const ExitTile& a, const ExitTile& b) {
+                                 return a.minDist < b.minDist;
+                             });
+            win.supers.push_back(st);
         }
     std::stable_sort(
-        tiles.begin(), tiles.end(),
-        [](const ExitTile& a, const ExitTile& b) { return a.minDist < b.minDist; });
+        win.supers.begin(), win.supers.end(),
+        [](const ExitSuper& a, const ExitSuper& b) { return a.minDist < b.minDist; });
     return win;
+}
+
+/// i mod n, cheaply for i in [-n, 2n).
+inline int WrapFast(int i, int n) {
+    if (i < 0) return i >= -n ? i + n : Wrap(i, n);
+    return i < n ? i : (i < 2 * n ? i - n : Wrap(i, n));
+}
+
+/// Sectors of `mask` whose L is above v.
+RS_INLINE SectorBits OpenSectors(const float* L, SectorBits mask, float v) {
+    unsigned open = 0;
+    for (int k = 0; k < kSectors; ++k) open |= unsigned(L[k] > v) << k;
+    return SectorBits(open & mask);
 }
 
 /// The exit field of texel (i, j) into L[0..kSectors): per sector, the distance to the
 /// nearest cell deeper than d (the march's z after its first step) in the window, `edge`
-/// when none is. winMax: 8x8 window maxima of depth (tiles without a deeper cell are
-/// skipped).
+/// when none is. max8, max32: depth maxima over the 8x8 and 32x32 windows (tiles and
+/// super-tiles without a deeper cell are skipped).
 void ExitDistancesOfTexel(const DepthField& hf, const ExitWindow& win,
-                          const std::vector<float>& winMax, int i, int j, float d,
-                          float edge, float* L) {
+                          const std::vector<float>& max8, const std::vector<float>& max32,
+                          int i, int j, float d, float edge, float* L) {
     const int W = hf.width, H = hf.height;
     std::fill(L, L + kSectors, edge);
     float worst = edge;
-    for (const ExitTile& t : win.tiles) {
-        if (t.minDist >= worst) break;
-        SectorBits open = 0;
-        for (int k = 0; k < kSectors; ++k)
-            if ((t.mask >> k & 1u) && L[k] > t.minDist) open |= SectorBits(1u << k);
-        if (!open) continue;
-        if (!(winMax[size_t(Wrap(j + t.oy, H)) * size_t(W) + size_t(Wrap(i + t.ox, W))] >
-              d))
+    for (const ExitSuper& st : win.supers) {
+        if (st.minDist >= worst) break;
+        if (!OpenSectors(L, st.mask, st.minDist)) continue;
+        if (!(max32[size_t(WrapFast(j + st.oy, H)) * size_t(W) +
+                    size_t(WrapFast(i + st.ox, W))] > d))
             continue;
-        bool changed = false;
-        for (int o = t.begin; o < t.end; ++o) {
-            const ExitOffset& off = win.offs[size_t(o)];
-            if (!(off.mask & open)) continue;
-            if (!(hf.At(Wrap(i + off.dx, W), Wrap(j + off.dy, H)) > d)) continue;
-            changed |= LowerMasked(unsigned(off.mask), off.dist, L);
+        for (int x = st.first; x < st.last; ++x) {
+            const ExitTile& t = win.tiles[size_t(x)];
+            if (t.minDist >= worst) break;  // sorted by distance
+            const SectorBits open = OpenSectors(L, t.mask, t.minDist);
+            if (!open) continue;
+            const int wy = WrapFast(j + t.oy, H), wx = WrapFast(i + t.ox, W);
+            if (!(max8[size_t(wy) * size_t(W) + size_t(wx)] > d)) continue;
+            bool changed = false;
+            for (int o = t.begin; o < t.end; ++o) {
+                const ExitOffset& off = win.offs[size_t(o)];
+                if (!(off.mask & open)) continue;
+                const int y = WrapFast(wy + (off.dy - t.oy), H),
+                          xx = WrapFast(wx + (off.dx - t.ox), W);
+                if (!(hf.depth[size_t(y) * size_t(W) + size_t(xx)] > d)) continue;
+                changed |= LowerMasked(unsigned(off.mask), off.dist, L);
+            }
+            if (changed) worst = *std::max_element(L, L + kSectors);
         }
-        if (changed) worst = *std::max_element(L, L + kSectors);
     }
 }
 
@@ -321,7 +364,8 @@ ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted
     const float edge = FloatAtMost(std::min((Rx + 0.5) / W, (Ry + 0.5) / H) - e);
     float dmax = hf.depth[0];
     for (float d : hf.depth) dmax = std::max(dmax, d);
-    const std::vector<float> winMax = WindowMaxima(hf.depth, W, H, kTile);
+    const std::vector<float> max8 = WindowMaxima(hf.depth, W, H, kTile);
+    const std::vector<float> max32 = WindowMaxima(max8, W, H, kSuperTile, kTile);
     std::vector<float> Lf(N * kSectors, kInfF);
     tbb::parallel_for(
         tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
@@ -335,7 +379,7 @@ ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted
                     if (!(d < dmax))
                         continue;  // nothing is deeper: no cell can end a march
                     ExitDistancesOfTexel(
-                        hf, win, winMax, i, j, d, edge,
+                        hf, win, max8, max32, i, j, d, edge,
                         &Lf[(size_t(j) * size_t(W) + size_t(i)) * kSectors]);
                 }
         });
@@ -381,6 +425,7 @@ struct RelaxedOffset {
     double distLo;  ///< below the float distance bound (MakeRelaxedOffset's margins)
     double dist;    ///< exact uv distance
     double invD;    ///< (1 - 2^-20) / (dist + 2^-21), rounded down
+    double stepK;   ///< one march step is >= stepK * (1 - b) / b (b: destination depth)
     int dx, dy;
     float fdx, fdy;   ///< float(dx) / W, float(dy) / H: the listing's offset
     uint8_t lx, ly;   ///< position in its 8x8 tile
@@ -457,11 +502,13 @@ void BruteRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geometr
 /// One offset of tile t with its bounds (margins: docs/cone_maps.md, section "Margins of
 /// the per-offset bounds").
 RelaxedOffset MakeRelaxedOffset(const Offset& off, const OffsetTile& t, const Geometry& g,
-                                int W, int H) {
+                                int W, int H, int steps) {
     RelaxedOffset ro;
     ro.dist = std::sqrt(double(off.s)) / g.scale;
     ro.distLo = std::max(0.0, ro.dist - 0x1p-20) * (1.0 - 0x1p-19);
     ro.invD = (1.0 - 0x1p-20) * (1.0 - 0x1p-40) / (ro.dist + 0x1p-21);
+    ro.stepK = std::max(0.0, ro.dist - 0x1p-22) / double(steps) * (1.0 - 0x1p-20) *
+               (1.0 - 0x1p-30);
     ro.dx = off.dx;
     ro.dy = off.dy;
     ro.fdx = float(off.dx) / float(W);
@@ -486,7 +533,7 @@ struct RelaxedGroups {
 };
 
 /// Offsets and groups of every tile of `to`, quarter by quarter.
-void GroupTileOffsets(const TiledOffsets& to, const Geometry& g, int W, int H,
+void GroupTileOffsets(const TiledOffsets& to, const Geometry& g, int W, int H, int steps,
                       RelaxedGroups& groups) {
     std::vector<RelaxedOffset>& offs = groups.offs;
     offs.reserve(to.offsets.size());
@@ -497,7 +544,7 @@ void GroupTileOffsets(const TiledOffsets& to, const Geometry& g, int W, int H,
         std::vector<RelaxedOffset> q[4];
         for (int o = t.begin; o < t.end; ++o) {
             const RelaxedOffset off =
-                MakeRelaxedOffset(to.offsets[size_t(o)], t, g, W, H);
+                MakeRelaxedOffset(to.offsets[size_t(o)], t, g, W, H, steps);
             rt.nx = std::max(rt.nx, int(off.lx) + 1);
             rt.ny = std::max(rt.ny, int(off.ly) + 1);
             q[(off.lx >= 4 ? 1 : 0) + (off.ly >= 4 ? 2 : 0)].push_back(off);
@@ -552,9 +599,13 @@ struct RelaxedSearch {
     const DepthField& hf;
     const TiledOffsets& to;
     const RelaxedGroups& groups;
-    const std::vector<float>& win;    ///< depth minima over the 8x8 windows
-    const std::vector<float>& win32;  ///< ... 32x32 windows
-    const std::vector<float>& win4;   ///< ... 4x4 windows
+    const std::vector<float>& win;      ///< depth minima over the 8x8 windows
+    const std::vector<float>& win32;    ///< ... 32x32 windows
+    const std::vector<float>& win4;     ///< ... 4x4 windows
+    const std::vector<float>& max8;     ///< depth maxima over the 8x8 windows
+    const std::vector<float>& max32;    ///< ... 32x32 windows
+    const std::vector<float>& max4;     ///< ... 4x4 windows
+    const std::vector<float>& shallow;  ///< per texel (1 - b) / b rounded down
     const ExitField& ef;
     int steps;  ///< the listing's search steps
     float inv;  ///< PowerOfTwoInverse(steps)
@@ -570,6 +621,8 @@ struct RelaxedSearch {
     RelaxedSearch(const DepthField& hf, const TiledOffsets& to,
                   const RelaxedGroups& groups, const std::vector<float>& win,
                   const std::vector<float>& win32, const std::vector<float>& win4,
+                  const std::vector<float>& max8, const std::vector<float>& max32,
+                  const std::vector<float>& max4, const std::vector<float>& shallow,
                   const ExitField& ef, int steps, float inv, float dmin, int halfX)
         : hf(hf),
           to(to),
@@ -577,6 +630,10 @@ struct RelaxedSearch {
           win(win),
           win32(win32),
           win4(win4),
+          max8(max8),
+          max32(max32),
+          max4(max4),
+          shallow(shallow),
           ef(ef),
           steps(steps),
           inv(inv),
@@ -597,15 +654,22 @@ struct RelaxedSearch {
 
     /// A group is skipped when no pair in it can lower `best`: no destination above the
     /// apex in its window (minimum depth wmin at window index w), the distance bound, or
-    /// the exit bound (lwin: the exit field's minima over windows of the group's size).
-    RS_INLINE bool GroupPrunes(const RelaxedGroup& q, size_t w, float wmin,
+    /// the exit bound (lwin: the exit field's minima over windows of the group's size;
+    /// wmax: the window's maximum depth, which bounds the length of one march step).
+    RS_INLINE bool GroupPrunes(const RelaxedGroup& q, size_t w, float wmin, float wmax,
                                const std::vector<uint16_t>& lwin) const {
         if (!(wmin < apex)) return true;
         if (q.distLo >= double(rb.best) * (dApex - double(wmin))) return true;
         if (!ef.usable) return false;
+        // One step of the march is at least |v| (1 - b) / (b steps) long (OffsetPrunes),
+        // and (1 - b) / b only shrinks as b grows: the window's deepest texel bounds it.
+        if (!(wmax > 0.0f)) return true;  // every destination gives NaN: ignored
+        const double bmax = double(wmax);
+        const double stepLo = (q.dLo - 0x1p-22) * (1.0 - bmax) / (bmax * double(steps)) *
+                              (1.0 - 0x1p-20) * (1.0 - 0x1p-30);
         return ExitBoundPrunes(ef, q.dLo, q.invD, double(wmin),
                                double(MinOverSectors(lwin, w, q.mask)), dApex,
-                               double(rb.best));
+                               double(rb.best), stepLo);
     }
 
     /// The same for one offset whose destination texel `dst` has depth b. The listing
@@ -618,10 +682,10 @@ struct RelaxedSearch {
         if (ef.usable) {
             const float lp = MinOverSectors(ef.L, dst, off.mask);
             // One step of the march is |v| (1 - b) / (b steps) long (float roundings of
-            // v, the scale and the step within the factors).
+            // v, the scale and the step within the factors: RelaxedOffset::stepK, and
+            // (1 - b) / b rounded down per texel).
             if (!(b > 0.0f)) return true;  // the listing gives NaN: ignored
-            const double stepLo = (off.dist - 0x1p-22) * (1.0 - db) /
-                                  (db * double(steps)) * (1.0 - 0x1p-20);
+            const double stepLo = off.stepK * double(shallow[dst]);
             if (ExitBoundPrunes(ef, off.dist, off.invD, db, double(lp), dApex,
                                 double(rb.best), stepLo))
                 return true;
@@ -642,7 +706,7 @@ struct RelaxedSearch {
             const RelaxedGroup& q = t.quarter[k];
             if (q.begin == q.end) continue;
             const size_t w4 = rowBase[(k >> 1) * 4] + size_t(col[(k & 1) * 4]);
-            if (GroupPrunes(q, w4, win4[w4], ef.Lwin4)) continue;
+            if (GroupPrunes(q, w4, win4[w4], max4[w4], ef.Lwin4)) continue;
             for (int o = q.begin; o < q.end; ++o) {
                 const RelaxedOffset& off = groups.offs[size_t(o)];
                 const size_t dst = rowBase[off.ly] + size_t(col[off.lx]);
@@ -662,7 +726,7 @@ struct RelaxedSearch {
             if (t.all.distLo >= double(rb.best) * reachAll) break;  // sorted by distance
             const int wx = WrapNear(i + t.all.ox, W), wy = WrapNear(j + t.all.oy, H);
             const size_t w0 = size_t(wy) * size_t(W) + size_t(wx);
-            if (GroupPrunes(t.all, w0, win[w0], ef.Lwin)) continue;
+            if (GroupPrunes(t.all, w0, win[w0], max8[w0], ef.Lwin)) continue;
             SearchTile(t, wx, wy);
         }
     }
@@ -698,7 +762,7 @@ struct RelaxedSearch {
             if (sb.distLo >= double(rb.best) * reachAll) break;  // sorted by distance
             const size_t ws = size_t(WrapNear(j + sb.oy, H)) * size_t(W) +
                               size_t(WrapNear(i + sb.ox, W));
-            if (GroupPrunes(sb, ws, win32[ws], ef.Lwin32)) continue;
+            if (GroupPrunes(sb, ws, win32[ws], max32[ws], ef.Lwin32)) continue;
             SearchSuperTile(si, reachAll);
         }
         return rb;
@@ -715,16 +779,24 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
     SearchWindows sw;  // depth minima over 8x8 and 32x32 windows, as the tiled search's
     MakeSearchWindows(hf, sw);
     const std::vector<float> win4 = WindowMinima(hf.depth, W, H, 1, 4);
+    const std::vector<float> max4 = WindowMaxima(hf.depth, W, H, 4);
+    const std::vector<float> max8 = WindowMaxima(max4, W, H, 2, 4);
+    const std::vector<float> max32 = WindowMaxima(max8, W, H, kSuperTile, kTile);
+    std::vector<float> shallow(hf.depth.size(), 0.0f);
+    for (size_t t = 0; t < shallow.size(); ++t) {
+        const double b = double(hf.depth[t]);
+        if (b > 0) shallow[t] = FloatAtMost((1.0 - b) / b);
+    }
     const float inv = PowerOfTwoInverse(p.searchSteps);
     const ExitField ef = BuildExitField(hf, p.searchSteps, inv, exitField);
     RelaxedGroups groups;
-    GroupTileOffsets(to, g, W, H, groups);
+    GroupTileOffsets(to, g, W, H, p.searchSteps, groups);
     BoundSuperTiles(to, groups);
     ProgressCounter progress(p.progress, H);
     tbb::parallel_for(
         tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& rows) {
-            RelaxedSearch search(hf, to, groups, sw.win8, sw.win32, win4, ef,
-                                 p.searchSteps, inv, dmin, g.halfX);
+            RelaxedSearch search(hf, to, groups, sw.win8, sw.win32, win4, max8, max32,
+                                 max4, shallow, ef, p.searchSteps, inv, dmin, g.halfX);
             for (int j = rows.begin(); j < rows.end(); ++j, progress.Add(1)) {
                 int seedDx[16] = {}, seedDy[16] = {};
                 bool seedOk[16] = {};
