@@ -175,8 +175,9 @@ TEST(ConeMap, RelaxedFastEqualsListingBruteForce) {
                        hf.name + " relaxed 128 " + std::to_string(hf.width));
     // Maps smaller than the exit field's window (at least 8 texels each way) and its
     // 32x32 super-tiles: the window wraps around the map several times.
-    for (const DepthField& hf : {RandomField(9, 5, 13, true), RandomField(2, 7, 14, false),
-                                 RandomField(1, 3, 15, true), RandomField(17, 1, 16, false)})
+    for (const DepthField& hf :
+         {RandomField(9, 5, 13, true), RandomField(2, 7, 14, false),
+          RandomField(1, 3, 15, true), RandomField(17, 1, 16, false)})
         ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed, p),
                        GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p),
                        hf.name + " relaxed 128 " + std::to_string(hf.width) + "x" +
