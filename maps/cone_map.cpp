@@ -358,8 +358,8 @@ std::vector<float> WindowMaxima(const std::vector<float>& v, int W, int H, int k
 
 template std::vector<float> WindowMinima(const std::vector<float>&, int, int, int, int,
                                          int);
-template std::vector<uint16_t> WindowMinima(const std::vector<uint16_t>&, int, int, int,
-                                            int, int);
+template std::vector<uint8_t> WindowMinima(const std::vector<uint8_t>&, int, int, int,
+                                           int, int);
 
 void MakeSearchWindows(const DepthField& hf, SearchWindows& out) {
     auto mn = [](float a, float b) { return std::min(a, b); };

@@ -115,8 +115,8 @@ std::vector<T> WindowMinima(const std::vector<T>& v, int W, int H, int C, int k,
                             int step = 1);
 extern template std::vector<float> WindowMinima(const std::vector<float>&, int, int, int,
                                                 int, int);
-extern template std::vector<uint16_t> WindowMinima(const std::vector<uint16_t>&, int, int,
-                                                   int, int, int);
+extern template std::vector<uint8_t> WindowMinima(const std::vector<uint8_t>&, int, int,
+                                                  int, int, int);
 
 /// The same with max, one channel.
 std::vector<float> WindowMaxima(const std::vector<float>& v, int W, int H, int k,

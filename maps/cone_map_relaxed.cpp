@@ -16,6 +16,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <limits>
@@ -137,6 +138,13 @@ float RelaxedPairRatio(const DepthField& hf, int ti, int tj, int dx, int dy, int
 
 namespace {
 
+/// v rounded to a float at most v (and at least 0).
+float FloatAtMost(double v) {
+    float r = float(v);
+    if (double(r) > v) r = std::nextafter(r, 0.0f);
+    return std::max(r, 0.0f);
+}
+
 /// Bounds on where the listing's float march can stop, and the exit field: per texel t
 /// (depth b) and sector k, L[t * kSectors + k] <= the uv distance from t's centre to
 /// every cell deeper than t(b) = fl(b + fl(fl(1 - b) / steps)) (the march's z after its
@@ -148,22 +156,38 @@ struct ExitField {
         0;  ///< uv: march points lie within eps of the exact ray (MakeExitFieldSlack)
     double eta = 0;  ///< depth: accumulated rounding of the march's z
     bool usable = false;
-    // Stored as the upper 16 bits of the float (bfloat16 truncated: never larger, so
-    // still a lower bound; half the memory of floats, 128 MB for all four at 1024²).
-    std::vector<uint16_t> L;  ///< kSectors per texel
-    std::vector<uint16_t>
+    // One byte per value, a code of ExitCodes (rounded down, so still a lower bound):
+    // 64 MB each at 2048², against 128 MB as bfloat16 and 256 MB as floats.
+    std::vector<uint8_t> L;  ///< kSectors per texel
+    std::vector<uint8_t>
         Lwin;  ///< kSectors per texel: min of L over the 8x8 window starting there
-    std::vector<uint16_t> Lwin4;   ///< the same over the 4x4 window
-    std::vector<uint16_t> Lwin32;  ///< the same over the 32x32 window
+    std::vector<uint8_t> Lwin4;       ///< the same over the 4x4 window
+    std::vector<uint8_t> Lwin32;      ///< the same over the 32x32 window
+    std::array<float, 256> decode{};  ///< code -> uv distance (ExitCodes)
 };
 
-/// Non-negative float -> its upper 16 bits (rounds toward zero, keeps +inf); and back.
-inline uint16_t PackDown(float v) { return uint16_t(std::bit_cast<uint32_t>(v) >> 16); }
-inline float Unpack(uint16_t h) { return std::bit_cast<float>(uint32_t(h) << 16); }
-std::vector<uint16_t> PackAll(const std::vector<float>& v) {
-    std::vector<uint16_t> out(v.size());
-    for (size_t i = 0; i < v.size(); ++i) out[i] = PackDown(v[i]);
-    return out;
+/// The exit field's byte codes: 0 is 0, 255 is +inf, and 1..254 are uv distances in
+/// geometric steps from a quarter texel (1/4 of 1/max(W, H)) to `edge` (the largest
+/// finite value of the field), each rounded down to a float: a step of 2.8% at 2048²
+/// (edge = 256 texels), 2.6% at 1024². A value is stored as the largest code whose
+/// distance is at most the value, so the codes' order is the values' order and a
+/// decoded code is a lower bound.
+std::array<float, 256> ExitCodes(int W, int H, float edge) {
+    std::array<float, 256> d{};
+    const double lo = 0.25 / double(std::max(W, H));
+    const double r = std::pow(std::max(double(edge), 2 * lo) / lo, 1.0 / 253.0);
+    d[0] = 0.0f;
+    for (int c = 1; c < 255; ++c) d[size_t(c)] = FloatAtMost(lo * std::pow(r, c - 1));
+    d[254] = std::min(d[254], edge);
+    d[255] = kInfF;
+    for (int c = 1; c < 256; ++c) RS_CHECK(d[size_t(c)] > d[size_t(c - 1)]);
+    return d;
+}
+
+/// The code of a distance v >= 0 (the largest c with decode[c] <= v).
+inline uint8_t EncodeDown(const std::array<float, 256>& decode, float v) {
+    const auto it = std::upper_bound(decode.begin(), decode.end(), v);
+    return uint8_t(it - decode.begin() - 1);
 }
 
 /// eps covers, for a march point E whose ratio is < 1 (so |E - src| < 1 and |E| < 2): the
@@ -230,13 +254,6 @@ struct ExitTile {
     float minDist;
     SectorBits mask;
 };
-
-/// v rounded to a float at most v (and at least 0).
-float FloatAtMost(double v) {
-    float r = float(v);
-    if (double(r) > v) r = std::nextafter(r, 0.0f);
-    return std::max(r, 0.0f);
-}
 
 /// The exit-field search window of radius (Rx, Ry) texels: its offsets (but (0, 0)) in
 /// 8x8 tiles, the tiles in 32x32 super-tiles (4x4 tiles), each sorted by its smallest
@@ -366,9 +383,12 @@ ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted
     for (float d : hf.depth) dmax = std::max(dmax, d);
     const std::vector<float> max8 = WindowMaxima(hf.depth, W, H, kTile);
     const std::vector<float> max32 = WindowMaxima(max8, W, H, kSuperTile, kTile);
-    std::vector<float> Lf(N * kSectors, kInfF);
+    // Coded as each texel is done (a float field would take 64 bytes per texel).
+    f.decode = ExitCodes(W, H, edge);
+    f.L.assign(N * kSectors, 255);
     tbb::parallel_for(
         tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
+            float L[kSectors];
             for (int j = r.begin(); j < r.end(); ++j)
                 for (int i = 0; i < W; ++i) {
                     // A march from this texel stops only in a cell deeper than its z
@@ -378,15 +398,14 @@ ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted
                     const float d = b + ListingStep(1.0f - b, steps, inv);
                     if (!(d < dmax))
                         continue;  // nothing is deeper: no cell can end a march
-                    ExitDistancesOfTexel(
-                        hf, win, max8, max32, i, j, d, edge,
-                        &Lf[(size_t(j) * size_t(W) + size_t(i)) * kSectors]);
+                    ExitDistancesOfTexel(hf, win, max8, max32, i, j, d, edge, L);
+                    uint8_t* out = &f.L[(size_t(j) * size_t(W) + size_t(i)) * kSectors];
+                    for (int k = 0; k < kSectors; ++k)
+                        out[k] = EncodeDown(f.decode, L[k]);
                 }
         });
-    // Window minima of L per sector, for offset tiles (8x8) and their quarters (4x4).
-    // On the packed values: their order is the floats' order.
-    f.L = PackAll(Lf);
-    Lf = {};
+    // Window minima of L per sector, for offset tiles (8x8) and their quarters (4x4),
+    // on the codes (their order is the distances' order).
     f.Lwin4 = WindowMinima(f.L, W, H, kSectors, 4);
     f.Lwin = WindowMinima(f.Lwin4, W, H, kSectors, 2, 4);
     f.Lwin32 = WindowMinima(f.Lwin, W, H, kSectors, 4, kTile);
@@ -413,19 +432,22 @@ RS_INLINE bool ExitBoundPrunes(const ExitField& f, double dLo, double invD, doub
 }
 
 /// The smallest exit-field value over the sectors of `mask` at texel (or window) t.
-inline float MinOverSectors(const std::vector<uint16_t>& field, size_t t, unsigned mask) {
-    float m = kInfF;
-    for (; mask; mask &= mask - 1)
-        m = std::min(m, Unpack(field[t * kSectors + size_t(std::countr_zero(mask))]));
-    return m;
+inline float MinOverSectors(const ExitField& f, const std::vector<uint8_t>& field,
+                            size_t t, unsigned mask) {
+    unsigned m = 255;
+    const uint8_t* v = &field[t * kSectors];
+    for (; mask; mask &= mask - 1) m = std::min(m, unsigned(v[std::countr_zero(mask)]));
+    return f.decode[m];
 }
 
-/// One offset of the pruned search, with what its tests need.
+/// One offset of the pruned search, with what its tests need. The bounds are floats
+/// rounded down from their double values (each is used as a lower bound; 36 bytes an
+/// offset, and a 2048² map has 4 M offsets).
 struct RelaxedOffset {
-    double distLo;  ///< below the float distance bound (MakeRelaxedOffset's margins)
-    double dist;    ///< exact uv distance
-    double invD;    ///< (1 - 2^-20) / (dist + 2^-21), rounded down
-    double stepK;   ///< one march step is >= stepK * (1 - b) / b (b: destination depth)
+    float distLo;  ///< below the float distance bound (MakeRelaxedOffset's margins)
+    float dist;    ///< uv distance (rounded down)
+    float invD;    ///< (1 - 2^-20) / (dist + 2^-21), rounded down
+    float stepK;   ///< one march step is >= stepK * (1 - b) / b (b: destination depth)
     int dx, dy;
     float fdx, fdy;   ///< float(dx) / W, float(dy) / H: the listing's offset
     uint8_t lx, ly;   ///< position in its 8x8 tile
@@ -440,7 +462,9 @@ struct RelaxedGroup {
     double dLo = 0;          ///< min exact distance
     double invD = 1;         ///< min invD (farthest offset)
     SectorBits mask = 0;     ///< union of the offsets' sectors
-    void Add(const RelaxedOffset& o) { Add(o.distLo, o.dist, o.invD, o.mask); }
+    void Add(const RelaxedOffset& o) {
+        Add(double(o.distLo), double(o.dist), double(o.invD), o.mask);
+    }
     /// Extends the bounds to a whole group (a tile into its super-tile); counts one
     /// member.
     void Add(const RelaxedGroup& g) { Add(g.distLo, g.dLo, g.invD, g.mask); }
@@ -504,11 +528,12 @@ void BruteRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geometr
 RelaxedOffset MakeRelaxedOffset(const Offset& off, const OffsetTile& t, const Geometry& g,
                                 int W, int H, int steps) {
     RelaxedOffset ro;
-    ro.dist = std::sqrt(double(off.s)) / g.scale;
-    ro.distLo = std::max(0.0, ro.dist - 0x1p-20) * (1.0 - 0x1p-19);
-    ro.invD = (1.0 - 0x1p-20) * (1.0 - 0x1p-40) / (ro.dist + 0x1p-21);
-    ro.stepK = std::max(0.0, ro.dist - 0x1p-22) / double(steps) * (1.0 - 0x1p-20) *
-               (1.0 - 0x1p-30);
+    const double dist = std::sqrt(double(off.s)) / g.scale;
+    ro.dist = FloatAtMost(dist);
+    ro.distLo = FloatAtMost(std::max(0.0, dist - 0x1p-20) * (1.0 - 0x1p-19));
+    ro.invD = FloatAtMost((1.0 - 0x1p-20) * (1.0 - 0x1p-40) / (dist + 0x1p-21));
+    ro.stepK = FloatAtMost(std::max(0.0, dist - 0x1p-22) / double(steps) *
+                           (1.0 - 0x1p-20) * (1.0 - 0x1p-30));
     ro.dx = off.dx;
     ro.dy = off.dy;
     ro.fdx = float(off.dx) / float(W);
@@ -518,7 +543,7 @@ RelaxedOffset MakeRelaxedOffset(const Offset& off, const OffsetTile& t, const Ge
     // Sectors the listing's float step direction can lie in (tolerance:
     // docs/cone_maps.md, section "Margins of the per-offset bounds").
     const double angle = std::atan2(double(off.dy) / H, double(off.dx) / W);
-    const double tol = 0x1p-22 / ro.dist + 1e-12;
+    const double tol = 0x1p-22 / dist + 1e-12;
     ro.mask = IntervalSectorMask(angle - tol, angle + tol);
     return ro;
 }
@@ -657,7 +682,7 @@ struct RelaxedSearch {
     /// the exit bound (lwin: the exit field's minima over windows of the group's size;
     /// wmax: the window's maximum depth, which bounds the length of one march step).
     RS_INLINE bool GroupPrunes(const RelaxedGroup& q, size_t w, float wmin, float wmax,
-                               const std::vector<uint16_t>& lwin) const {
+                               const std::vector<uint8_t>& lwin) const {
         if (!(wmin < apex)) return true;
         if (q.distLo >= double(rb.best) * (dApex - double(wmin))) return true;
         if (!ef.usable) return false;
@@ -668,7 +693,7 @@ struct RelaxedSearch {
         const double stepLo = (q.dLo - 0x1p-22) * (1.0 - bmax) / (bmax * double(steps)) *
                               (1.0 - 0x1p-20) * (1.0 - 0x1p-30);
         return ExitBoundPrunes(ef, q.dLo, q.invD, double(wmin),
-                               double(MinOverSectors(lwin, w, q.mask)), dApex,
+                               double(MinOverSectors(ef, lwin, w, q.mask)), dApex,
                                double(rb.best), stepLo);
     }
 
@@ -678,16 +703,17 @@ struct RelaxedSearch {
     /// pair.
     RS_INLINE bool OffsetPrunes(const RelaxedOffset& off, size_t dst, float b) const {
         const double db = double(b);
-        if (!(b < apex) || off.distLo >= double(rb.best) * (dApex - db)) return true;
+        if (!(b < apex) || double(off.distLo) >= double(rb.best) * (dApex - db))
+            return true;
         if (ef.usable) {
-            const float lp = MinOverSectors(ef.L, dst, off.mask);
+            const float lp = MinOverSectors(ef, ef.L, dst, off.mask);
             // One step of the march is |v| (1 - b) / (b steps) long (float roundings of
             // v, the scale and the step within the factors: RelaxedOffset::stepK, and
             // (1 - b) / b rounded down per texel).
             if (!(b > 0.0f)) return true;  // the listing gives NaN: ignored
-            const double stepLo = off.stepK * double(shallow[dst]);
-            if (ExitBoundPrunes(ef, off.dist, off.invD, db, double(lp), dApex,
-                                double(rb.best), stepLo))
+            const double stepLo = double(off.stepK) * double(shallow[dst]);
+            if (ExitBoundPrunes(ef, double(off.dist), double(off.invD), db, double(lp),
+                                dApex, double(rb.best), stepLo))
                 return true;
         }
         return false;
@@ -775,7 +801,11 @@ struct RelaxedSearch {
 void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geometry& g,
                       float dmin, bool exitField, RelaxedOutput& out) {
     const int W = hf.width, H = hf.height, K = out.K;
-    const TiledOffsets to = MakeTiledOffsets(g, ConeKind::Cone);
+    // The exit field first: its build's scratch is freed before the offsets and windows
+    // are made (peak memory at 2048²).
+    const float inv = PowerOfTwoInverse(p.searchSteps);
+    const ExitField ef = BuildExitField(hf, p.searchSteps, inv, exitField);
+    TiledOffsets to = MakeTiledOffsets(g, ConeKind::Cone);
     SearchWindows sw;  // depth minima over 8x8 and 32x32 windows, as the tiled search's
     MakeSearchWindows(hf, sw);
     const std::vector<float> win4 = WindowMinima(hf.depth, W, H, 1, 4);
@@ -787,10 +817,9 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
         const double b = double(hf.depth[t]);
         if (b > 0) shallow[t] = FloatAtMost((1.0 - b) / b);
     }
-    const float inv = PowerOfTwoInverse(p.searchSteps);
-    const ExitField ef = BuildExitField(hf, p.searchSteps, inv, exitField);
     RelaxedGroups groups;
     GroupTileOffsets(to, g, W, H, p.searchSteps, groups);
+    std::vector<Offset>().swap(to.offsets);  // the groups hold them now
     BoundSuperTiles(to, groups);
     ProgressCounter progress(p.progress, H);
     tbb::parallel_for(

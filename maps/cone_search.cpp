@@ -147,11 +147,14 @@ void BuildRipMap(const ConeSearchData& d, ConeSearchData::RipMap& rip) {
         }
 }
 
-/// The rip-maps of acm4 and acm8 (ConeSearchData::RipMap); none for the others (the
-/// quadtree serves the cone, and quad's half planes, well), and
-/// none for acm8 on non-square maps, whose uv diagonals are not texel diagonals.
-void MakeRipMaps(ConeSearchData& d) {
+/// The rip-maps of acm4 and acm8 (ConeSearchData::RipMap, without their cells); none for
+/// the others (the quadtree serves the cone, and quad's half planes, well), and none for
+/// acm8 on non-square maps, whose uv diagonals are not texel diagonals. The one place
+/// that decides them: the search makes one pass per rip-map, and ConeSearchPasses counts
+/// them for the progress total before the search starts.
+std::vector<ConeSearchData::RipMap> RipMapLayout(ConeKind sectors, int W, int H) {
     using Rip = ConeSearchData::RipMap;
+    std::vector<Rip> rips;
     auto add = [&](int alpha, int beta, std::initializer_list<std::array<int, 3>> ch) {
         Rip r;
         r.alpha = alpha;
@@ -161,14 +164,14 @@ void MakeRipMaps(ConeSearchData& d) {
             r.sign1[size_t(c[0])] = int8_t(c[1]);
             r.sign2[size_t(c[0])] = int8_t(c[2]);
         }
-        d.rips.push_back(std::move(r));
+        rips.push_back(std::move(r));
     };
-    switch (d.sectors) {
+    switch (sectors) {
         case ConeKind::Acm4:  // closed quadrants
             add(0, 0, {{0, 1, 1}, {1, -1, 1}, {2, -1, -1}, {3, 1, -1}});
             break;
         case ConeKind::Acm8:
-            if (d.W != d.H) return;  // (ConeSearchPasses agrees)
+            if (W != H) break;
             // Each pair of opposite 45-degree sectors is a pair of quadrants of one
             // shear: s = X - Y for sectors 0, 4 (edges: the x axis and the diagonal), t =
             // Y - X for 1, 5, t = Y + X for 2, 6, s = X + Y for 3, 7.
@@ -178,9 +181,10 @@ void MakeRipMaps(ConeSearchData& d) {
             add(-1, 0, {{3, -1, 1}, {7, 1, -1}});
             break;
         default:
-            return;
+            break;
     }
-    // (Each rip-map is built by RunConeSearch right before its pass.)
+    // (Each rip-map's cells are built by RunConeSearch right before its pass.)
+    return rips;
 }
 
 }  // namespace
@@ -188,14 +192,7 @@ void MakeRipMaps(ConeSearchData& d) {
 const char* ConeSearchIsa() { return Isa().name; }
 
 int ConeSearchPasses(ConeKind sectors, int W, int H) {
-    switch (sectors) {
-        case ConeKind::Acm4:
-            return 1;
-        case ConeKind::Acm8:
-            return W == H ? 4 : 1;
-        default:
-            return 1;
-    }
+    return std::max(1, int(RipMapLayout(sectors, W, H).size()));
 }
 
 void RunConeSearch(const ConeSearchJob& job, ProgressCounter* progress) {
@@ -267,14 +264,13 @@ void RunConeSearch(const ConeSearchJob& job, ProgressCounter* progress) {
         }
         d.dmin = dmin;
     }
-    MakeRipMaps(d);
+    d.rips = RipMapLayout(d.sectors, d.W, d.H);
     const int tileRows = (d.H + kLaneTile - 1) / kLaneTile;
     // Bands of two tile rows: the seeds carry from row to row inside a band.
     constexpr int kBand = 2;
     const BandFn fn = Isa().fn;
     // One pass per rip-map (its channels only), so that one rip-map is read at a time.
-    const int passes = d.rips.empty() ? 1 : int(d.rips.size());
-    RS_CHECK(passes == ConeSearchPasses(job.sectors, d.W, d.H));
+    const int passes = ConeSearchPasses(job.sectors, d.W, d.H);
     // Only the pass's rip-map is held (4 W H floats): built before it, freed after.
     for (int pass = 0; pass < passes; ++pass) {
         d.ripPass = pass;
