@@ -314,10 +314,10 @@ ExitWindow MakeExitWindow(int W, int H, int Rx, int Ry, double e) {
     return win;
 }
 
-/// i mod n, cheaply for i in [-n, 2n).
+/// i mod n for any i; without a division for i in [-n, 2n) (the exit window wraps more
+/// than once only on maps smaller than it).
 inline int WrapFast(int i, int n) {
-    if (i < 0) return i >= -n ? i + n : Wrap(i, n);
-    return i < n ? i : (i < 2 * n ? i - n : Wrap(i, n));
+    return i >= -n && i < 2 * n ? WrapNear(i, n) : Wrap(i, n);
 }
 
 /// Sectors of `mask` whose L is above v.
@@ -365,8 +365,11 @@ void ExitDistancesOfTexel(const DepthField& hf, const ExitWindow& win,
 }
 
 /// The exit field (ExitField) of a map for `steps` steps; empty (usable = false) when
-/// its float argument does not hold or it is not wanted.
-ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted) {
+/// its float argument does not hold or it is not wanted. max8, max32: the map's depth
+/// maxima over 8x8 and 32x32 windows.
+ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted,
+                         const std::vector<float>& max8,
+                         const std::vector<float>& max32) {
     ExitField f = MakeExitFieldSlack(hf, steps);
     f.usable = f.usable && wanted;
     if (!f.usable) return f;
@@ -381,8 +384,6 @@ ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted
     const float edge = FloatAtMost(std::min((Rx + 0.5) / W, (Ry + 0.5) / H) - e);
     float dmax = hf.depth[0];
     for (float d : hf.depth) dmax = std::max(dmax, d);
-    const std::vector<float> max8 = WindowMaxima(hf.depth, W, H, kTile);
-    const std::vector<float> max32 = WindowMaxima(max8, W, H, kSuperTile, kTile);
     // Coded as each texel is done (a float field would take 64 bytes per texel).
     f.decode = ExitCodes(W, H, edge);
     f.L.assign(N * kSectors, 255);
@@ -801,17 +802,19 @@ struct RelaxedSearch {
 void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geometry& g,
                       float dmin, bool exitField, RelaxedOutput& out) {
     const int W = hf.width, H = hf.height, K = out.K;
-    // The exit field first: its build's scratch is freed before the offsets and windows
-    // are made (peak memory at 2048²).
+    // Depth maxima over 4x4, 8x8 and 32x32 windows (the exit field's build and the
+    // group bounds both use them).
+    const std::vector<float> max4 = WindowMaxima(hf.depth, W, H, 4);
+    const std::vector<float> max8 = WindowMaxima(max4, W, H, 2, 4);
+    const std::vector<float> max32 = WindowMaxima(max8, W, H, kSuperTile, kTile);
+    // The exit field before the offsets and the other windows: its build's scratch is
+    // freed before they are made (peak memory at 2048²).
     const float inv = PowerOfTwoInverse(p.searchSteps);
-    const ExitField ef = BuildExitField(hf, p.searchSteps, inv, exitField);
+    const ExitField ef = BuildExitField(hf, p.searchSteps, inv, exitField, max8, max32);
     TiledOffsets to = MakeTiledOffsets(g, ConeKind::Cone);
     SearchWindows sw;  // depth minima over 8x8 and 32x32 windows, as the tiled search's
     MakeSearchWindows(hf, sw);
     const std::vector<float> win4 = WindowMinima(hf.depth, W, H, 1, 4);
-    const std::vector<float> max4 = WindowMaxima(hf.depth, W, H, 4);
-    const std::vector<float> max8 = WindowMaxima(max4, W, H, 2, 4);
-    const std::vector<float> max32 = WindowMaxima(max8, W, H, kSuperTile, kTile);
     std::vector<float> shallow(hf.depth.size(), 0.0f);
     for (size_t t = 0; t < shallow.size(); ++t) {
         const double b = double(hf.depth[t]);
