@@ -418,95 +418,125 @@ class Engine {
         int32_t cx, cy;
     };
 
+    /// A tile's coordinates in a rip-map's sheared frame.
+    struct RipFrame {
+        int a, bt;                       ///< the shear: alpha, beta
+        int p1min, p1max, p2min, p2max;  ///< the valid lanes' range in (c1, c2)
+        VI lc1, lc2;                     ///< each lane's (c1, c2)
+    };
+
+    /// The lanes of `n.lanes` for which rip cell n can hold a blocker below the minimum
+    /// of a sector it meets from that lane's apex; a single texel that passes is
+    /// evaluated exactly here (and 0 returned: nothing is left to open).
+    RS_INLINE uint32_t RipTest(Tile& t, const ConeSearchData::RipMap& rip,
+                               const RipFrame& f, const RipNode& n) {
+        const int W = d_.W, H = d_.H;
+        const int a = f.a, bt = f.bt;
+        const int o1 = n.t1 * W, o2 = n.t2 * H;
+        const int A0 = o1 + (n.cx << n.lx),
+                  A1 = o1 + std::min((n.cx + 1) << n.lx, W) - 1;  // c1 range
+        const int B0 = o2 + (n.cy << n.ly),
+                  B1 = o2 + std::min((n.cy + 1) << n.ly, H) - 1;  // c2 range
+        // Sectors the cell can hold for some lane: quadrants of (c1, c2) offsets.
+        const int lo1 = A0 - f.p1max, hi1 = A1 - f.p1min, lo2 = B0 - f.p2max,
+                  hi2 = B1 - f.p2min;
+        uint32_t channels = 0;
+        for (uint32_t c = rip.channels; c; c &= c - 1) {
+            const int k = std::countr_zero(c);
+            // Quadrant of channel k in (c1, c2): signs from the table of the kind.
+            const int s1 = rip.sign1[size_t(k)], s2 = rip.sign2[size_t(k)];
+            const bool ok1 = s1 > 0 ? hi1 >= 0 : (s1 < 0 ? lo1 <= 0 : true);
+            const bool ok2 = s2 > 0 ? hi2 >= 0 : (s2 < 0 ? lo2 <= 0 : true);
+            if (ok1 && ok2) channels |= 1u << k;
+        }
+        if (!channels) return 0;
+        // The real bounding box of the cell.
+        const int X0 = A0 + std::min(a * B0, a * B1), X1 = A1 + std::max(a * B0, a * B1);
+        const int Y0 = B0 + std::min(bt * A0, bt * A1),
+                  Y1 = B1 + std::max(bt * A0, bt * A1);
+        const float m = rip.At(n.lx, n.ly, n.cx, n.cy);
+        // Per lane, the largest threshold of the channels whose quadrant the cell
+        // meets (the same sign test as above, with the lane's own offsets).
+        const VI lo1v = A0 - f.lc1, hi1v = A1 - f.lc1, lo2v = B0 - f.lc2,
+                 hi2v = B1 - f.lc2;
+        VF thr = VF{} - INFINITY;
+        VI meets{};
+        for (uint32_t c = channels; c; c &= c - 1) {
+            const int k = std::countr_zero(c);
+            const int s1 = rip.sign1[size_t(k)], s2 = rip.sign2[size_t(k)];
+            VI ok = VI{} - 1;
+            if (s1 > 0) ok &= hi1v >= 0;
+            if (s1 < 0) ok &= lo1v <= 0;
+            if (s2 > 0) ok &= hi2v >= 0;
+            if (s2 < 0) ok &= lo2v <= 0;
+            thr = ok ? Max(thr, t.thr[k]) : thr;
+            meets |= ok;
+        }
+        const uint32_t lanes =
+            Bits(meets & BoundLanes(t, X0, X1, Y0, Y1, m, thr)) & n.lanes;
+        if (lanes && n.lx == 0 && n.ly == 0) {
+            // One texel (of depth m, the rip-map's level (0, 0)): the test above is
+            // TexelLanes' for it (its exact offset, and per lane the sectors that hold
+            // the offset, with the largest of their thresholds, which passes the lanes
+            // that one of them passes).
+            const int X = A0 + a * B0, Y = B0 + bt * A0;
+            for (uint32_t pass = lanes; pass; pass &= pass - 1)
+                Exact(t, std::countr_zero(pass), X, Y, m);
+            return 0;
+        }
+        return lanes;
+    }
+
     /// The sector kinds' traversal: binary splits (the longer side) of rip-map cells in
     /// sheared coordinates, where each sector the rip-map serves is a quadrant of
     /// (c1, c2) offsets; per lane, a cell is tested against the sectors it meets from
-    /// that lane's apex only.
+    /// that lane's apex only. A cell's two halves are tested together when it is split,
+    /// and only those that pass are pushed.
     void TraverseRip(Tile& t, const ConeSearchData::RipMap& rip) {
         const int W = d_.W, H = d_.H;
-        const int a = rip.alpha, bt = rip.beta;
+        RipFrame f;
+        f.a = rip.alpha;
+        f.bt = rip.beta;
+        const int a = f.a, bt = f.bt;
         // Lanes in sheared coordinates: c1 = X - alpha * c2 (beta = 0) or c1 = X (beta !=
         // 0, c2 = Y - beta * X); their range over the tile.
-        int p1min = INT32_MAX, p1max = INT32_MIN, p2min = INT32_MAX, p2max = INT32_MIN;
+        f.p1min = INT32_MAX, f.p1max = INT32_MIN, f.p2min = INT32_MAX,
+        f.p2max = INT32_MIN;
         for (int k = 0; k < kLanes; ++k) {
             if (!(t.valid >> k & 1u)) continue;
             const int X = t.pi[k], Y = t.pj[k];
             const int c1 = bt == 0 ? X - a * Y : X, c2 = bt == 0 ? Y : Y - bt * X;
-            p1min = std::min(p1min, c1), p1max = std::max(p1max, c1);
-            p2min = std::min(p2min, c2), p2max = std::max(p2max, c2);
+            f.p1min = std::min(f.p1min, c1), f.p1max = std::max(f.p1max, c1);
+            f.p2min = std::min(f.p2min, c2), f.p2max = std::max(f.p2max, c2);
         }
         // Each lane's own sheared coordinates: a cell's channels per lane (a subset of
         // the tile's) give each lane the threshold of the sectors it can meet there.
-        const VI lc1 = bt == 0 ? t.pi - a * t.pj : t.pi;
-        const VI lc2 = bt == 0 ? t.pj : t.pj - bt * t.pi;
+        f.lc1 = bt == 0 ? t.pi - a * t.pj : t.pi;
+        f.lc2 = bt == 0 ? t.pj : t.pj - bt * t.pi;
+        const int mid1 = (f.p1min + f.p1max) / 2, mid2 = (f.p2min + f.p2max) / 2;
         RipNode stack[kStack];
         int sp = 0;
         // Images: the sheared fundamental domain repeats by W in c1 and H in c2; the
         // windows (|dx| <= W/2, |dy| <= H/2) need c1 within one W plus a shear of H.
         const int r1 = (a != 0) ? 2 : 1, r2 = (bt != 0) ? 2 : 1;
         for (int i2 = -r2; i2 <= r2; ++i2)
-            for (int i1 = -r1; i1 <= r1; ++i1)
-                stack[sp++] = {int8_t(rip.levelsX),
-                               int8_t(rip.levelsY),
-                               int8_t(i1),
-                               int8_t(i2),
-                               uint16_t(t.valid),
-                               0,
-                               0};
-        while (sp) {
-            const RipNode n = stack[--sp];
-            const int o1 = n.t1 * W, o2 = n.t2 * H;
-            const int A0 = o1 + (n.cx << n.lx),
-                      A1 = o1 + std::min((n.cx + 1) << n.lx, W) - 1;  // c1 range
-            const int B0 = o2 + (n.cy << n.ly),
-                      B1 = o2 + std::min((n.cy + 1) << n.ly, H) - 1;  // c2 range
-            // The real bounding box of the cell.
-            const int X0 = A0 + std::min(a * B0, a * B1),
-                      X1 = A1 + std::max(a * B0, a * B1);
-            const int Y0 = B0 + std::min(bt * A0, bt * A1),
-                      Y1 = B1 + std::max(bt * A0, bt * A1);
-            // Sectors the cell can hold for some lane: quadrants of (c1, c2) offsets.
-            const int lo1 = A0 - p1max, hi1 = A1 - p1min, lo2 = B0 - p2max,
-                      hi2 = B1 - p2min;
-            uint32_t channels = 0;
-            for (uint32_t c = rip.channels; c; c &= c - 1) {
-                const int k = std::countr_zero(c);
-                // Quadrant of channel k in (c1, c2): signs from the table of the kind.
-                const int s1 = rip.sign1[size_t(k)], s2 = rip.sign2[size_t(k)];
-                const bool ok1 = s1 > 0 ? hi1 >= 0 : (s1 < 0 ? lo1 <= 0 : true);
-                const bool ok2 = s2 > 0 ? hi2 >= 0 : (s2 < 0 ? lo2 <= 0 : true);
-                if (ok1 && ok2) channels |= 1u << k;
+            for (int i1 = -r1; i1 <= r1; ++i1) {
+                RipNode r{int8_t(rip.levelsX),
+                          int8_t(rip.levelsY),
+                          int8_t(i1),
+                          int8_t(i2),
+                          uint16_t(t.valid),
+                          0,
+                          0};
+                r.lanes = uint16_t(RipTest(t, rip, f, r));
+                if (r.lanes) stack[sp++] = r;
             }
-            if (!channels) continue;
-            const float m = rip.At(n.lx, n.ly, n.cx, n.cy);
-            // Per lane, the largest threshold of the channels whose quadrant the cell
-            // meets (the same sign test as above, with the lane's own offsets).
-            const VI lo1v = A0 - lc1, hi1v = A1 - lc1, lo2v = B0 - lc2, hi2v = B1 - lc2;
-            VF thr = VF{} - INFINITY;
-            VI meets{};
-            for (uint32_t c = channels; c; c &= c - 1) {
-                const int k = std::countr_zero(c);
-                const int s1 = rip.sign1[size_t(k)], s2 = rip.sign2[size_t(k)];
-                VI ok = VI{} - 1;
-                if (s1 > 0) ok &= hi1v >= 0;
-                if (s1 < 0) ok &= lo1v <= 0;
-                if (s2 > 0) ok &= hi2v >= 0;
-                if (s2 < 0) ok &= lo2v <= 0;
-                thr = ok ? Max(thr, t.thr[k]) : thr;
-                meets |= ok;
-            }
-            const uint32_t lanes =
-                Bits(meets & BoundLanes(t, X0, X1, Y0, Y1, m, thr)) & n.lanes;
-            if (!lanes) continue;
-            if (n.lx == 0 && n.ly == 0) {
-                // One texel (of depth m, the rip-map's level (0, 0)): the test above is
-                // TexelLanes' for it (its exact offset, and per lane the sectors that
-                // hold the offset, with the largest of their thresholds, which passes
-                // the lanes that one of them passes).
-                const int X = A0 + a * B0, Y = B0 + bt * A0;
-                for (uint32_t pass = lanes; pass; pass &= pass - 1)
-                    Exact(t, std::countr_zero(pass), X, Y, m);
-                continue;
+        RipNode n;
+        bool have = false;
+        for (;;) {
+            if (!have) {
+                if (!sp) break;
+                n = stack[--sp];
             }
             // Split the longer side. (Splitting across a lane's sector edge first, which
             // keeps the cells along the edges one texel wide, opened 10-15% more cells:
@@ -514,37 +544,30 @@ class Engine {
             // lanes and sectors it cannot meet.)
             const bool split1 = n.ly == 0 || (n.lx > 0 && n.lx >= n.ly);
             RipNode c0 = n, c1 = n;
-            c0.lanes = c1.lanes = uint16_t(lanes);
+            bool has1, nearFirst0;
             if (split1) {
                 c0.lx = c1.lx = int8_t(n.lx - 1);
                 c0.cx = 2 * n.cx;
                 c1.cx = 2 * n.cx + 1;
-                const bool has1 = c1.cx < rip.cellsX[size_t(n.lx - 1)];
-                // The half nearer the tile's lanes is searched first (pushed last).
-                const int mid = o1 + (c1.cx << c1.lx);
-                const bool nearFirst0 = (p1min + p1max) / 2 < mid;
-                if (nearFirst0) {
-                    if (has1) stack[sp++] = c1;
-                    stack[sp++] = c0;
-                } else {
-                    stack[sp++] = c0;
-                    if (has1) stack[sp++] = c1;
-                }
+                has1 = c1.cx < rip.cellsX[size_t(n.lx - 1)];
+                nearFirst0 = mid1 < n.t1 * W + (c1.cx << c1.lx);
             } else {
                 c0.ly = c1.ly = int8_t(n.ly - 1);
                 c0.cy = 2 * n.cy;
                 c1.cy = 2 * n.cy + 1;
-                const bool has1 = c1.cy < rip.cellsY[size_t(n.ly - 1)];
-                const int mid = o2 + (c1.cy << c1.ly);
-                const bool nearFirst0 = (p2min + p2max) / 2 < mid;
-                if (nearFirst0) {
-                    if (has1) stack[sp++] = c1;
-                    stack[sp++] = c0;
-                } else {
-                    stack[sp++] = c0;
-                    if (has1) stack[sp++] = c1;
-                }
+                has1 = c1.cy < rip.cellsY[size_t(n.ly - 1)];
+                nearFirst0 = mid2 < n.t2 * H + (c1.cy << c1.ly);
             }
+            // The half nearer the tile's lanes is searched first (the next node; the
+            // other is pushed).
+            RipNode& nearC = nearFirst0 ? c0 : c1;
+            RipNode& farC = nearFirst0 ? c1 : c0;
+            if (!has1) c1.lanes = 0;
+            nearC.lanes = nearC.lanes ? uint16_t(RipTest(t, rip, f, nearC)) : 0;
+            farC.lanes = farC.lanes ? uint16_t(RipTest(t, rip, f, farC)) : 0;
+            if (farC.lanes) stack[sp++] = farC;
+            have = nearC.lanes != 0;
+            if (have) n = nearC;
         }
     }
 
