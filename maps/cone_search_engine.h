@@ -72,6 +72,13 @@ RS_INLINE VF ToFloat(const VI& v) { return __builtin_convertvector(v, VF); }
 /// lane's best: thresholds are float(best) * (1 + 2^-16), far above the float rounding
 /// of the test (a few 2^-24); depth differences below kTiny (whose squares could lose
 /// precision) always pass. docs/cone_maps.md, "The lane search".
+/// 0, 1, ..., kLanes - 1.
+const VI kIota = [] {
+    VI v{};
+    for (int k = 0; k < kLanes; ++k) v[k] = k;
+    return v;
+}();
+
 constexpr float kThresholdScale = 1.0f + 0x1p-16f;
 constexpr float kTiny = 0x1p-40f;
 
@@ -243,8 +250,25 @@ class Engine {
             if (!(FlagsAt(X, Y) >> ClassBit(sx, sy) & 1u)) return;
         }
         const double q = CandidateQ(g_.S(dx, dy), a, b);
-        unsigned mask =
+        const unsigned mask =
             d_.sectors == ConeKind::Cone ? 1u : SectorMask(d_.sectors, g_, dx, dy);
+        Update(t, k, X, Y, q, mask);
+    }
+
+    /// Exact for a texel whose sectors among the pass's channels are known: `mask`,
+    /// the rip-map's quadrants of its (c1, c2) offset (the closed sectors themselves;
+    /// the other passes' sectors are not needed).
+    void ExactIn(Tile& t, int k, int X, int Y, float b, unsigned mask) {
+        const int dx = X - t.pi[k], dy = Y - t.pj[k];
+        const float a = t.a[k];
+        if (!(b < a) || dx < -g_.halfX || dx > g_.halfX || dy < -g_.halfY ||
+            dy > g_.halfY || (dx == 0 && dy == 0))
+            return;
+        Update(t, k, X, Y, CandidateQ(g_.S(dx, dy), a, b), mask);
+    }
+
+    /// Lowers lane k's minimum of the channels in `mask` to q where q is below it.
+    void Update(Tile& t, int k, int X, int Y, double q, unsigned mask) {
         for (; mask; mask &= mask - 1) {
             const int c = std::countr_zero(mask);
             if (q < t.best[c][k]) {
@@ -423,6 +447,7 @@ class Engine {
         int a, bt;                       ///< the shear: alpha, beta
         int p1min, p1max, p2min, p2max;  ///< the valid lanes' range in (c1, c2)
         VI lc1, lc2;                     ///< each lane's (c1, c2)
+        float aMax;                      ///< the deepest valid apex
     };
 
     /// The lanes of `n.lanes` for which rip cell n can hold a blocker below the minimum
@@ -484,7 +509,79 @@ class Engine {
                 Exact(t, std::countr_zero(pass), X, Y, m);
             return 0;
         }
+        if (lanes && n.lx + n.ly <= kRipLeaf) {
+            RipLeaf(t, rip, f, n.lx, A0, A1, B0, B1, o1, o2, channels, lanes);
+            return 0;
+        }
         return lanes;
+    }
+
+    /// Every texel of a small rip cell [A0, A1] x [B0, B1] (sheared, in the image at
+    /// (o1, o2); at most kLanes texels) for the lanes `lanes`: the cell's texels are the
+    /// vector's elements, and each lane in turn tests them all (its offsets, the sector
+    /// of each of the pass's channels (a quadrant of (c1, c2) offsets), the float test);
+    /// the texels that pass are evaluated exactly.
+    RS_INLINE void RipLeaf(Tile& t, const ConeSearchData::RipMap& rip, const RipFrame& f,
+                           int lx, int A0, int A1, int B0, int B1, int o1, int o2,
+                           uint32_t channels, uint32_t lanes) {
+        // Element v is texel (A0 + v % 2^lx, B0 + v / 2^lx) of the cell (clipped:
+        // elements outside it have depth +inf, never a blocker).
+        const int w = A1 - A0 + 1, h = B1 - B0 + 1;
+        alignas(64) float depth[kLanes];
+        for (int v = 0; v < kLanes; ++v) depth[v] = INFINITY;
+        const float* row =
+            rip.mins.data() + size_t(B0 - o2) * size_t(d_.W) + size_t(A0 - o1);
+        for (int j = 0; j < h; ++j, row += d_.W)
+            for (int i = 0; i < w; ++i) depth[(j << lx) + i] = row[i];
+        VF b;
+        __builtin_memcpy(&b, depth, sizeof(b));
+        const VI c1 = A0 + (kIota & ((1 << lx) - 1)), c2 = B0 + (kIota >> lx);
+        const VI X = c1 + f.a * c2, Y = c2 + f.bt * c1;
+        for (; lanes; lanes &= lanes - 1) {
+            const int k = std::countr_zero(lanes);
+            const float ak = t.a[k];
+            const VI dx = X - t.pi[k], dy = Y - t.pj[k];
+            const VI off1 = c1 - f.lc1[k], off2 = c2 - f.lc2[k];
+            const VF fx = ToFloat(dx), fy = ToFloat(dy);
+            const VF s = fx * fx * wx_ + fy * fy * wy_;
+            const VF dd = ak - b;
+            const VF d2 = dd * dd;
+            const VI tiny = dd < kTiny;
+            // Blockers in the lane's window (ExactIn's test, so that the least float q
+            // below is taken over texels it evaluates).
+            const VI blocker = (ak > b) & (dx >= -g_.halfX) & (dx <= g_.halfX) &
+                               (dy >= -g_.halfY) & (dy <= g_.halfY);
+            VF q{};
+            bool haveQ = false;
+            for (uint32_t c = channels; c; c &= c - 1) {
+                const int ch = std::countr_zero(c);
+                const int s1 = rip.sign1[size_t(ch)], s2 = rip.sign2[size_t(ch)];
+                VI ok = (tiny | ~(s >= t.thr[ch][k] * d2)) & blocker;
+                if (s1 > 0) ok &= off1 >= 0;
+                if (s1 < 0) ok &= off1 <= 0;
+                if (s2 > 0) ok &= off2 >= 0;
+                if (s2 < 0) ok &= off2 <= 0;
+                uint32_t pass = Bits(ok);
+                if (!pass) continue;
+                if (pass & (pass - 1)) {
+                    // Several: only those within rounding of the least float q can be
+                    // the least exactly (and those of tiny depth difference, whose
+                    // float q is not reliable).
+                    if (!haveQ) {
+                        q = s / d2;
+                        haveQ = true;
+                    }
+                    float least = INFINITY;
+                    for (uint32_t p = pass; p; p &= p - 1)
+                        least = std::min(least, q[std::countr_zero(p)]);
+                    pass &= Bits((q <= least * kThresholdScale) | tiny);
+                }
+                for (; pass; pass &= pass - 1) {
+                    const int v = std::countr_zero(pass);
+                    ExactIn(t, k, X[v], Y[v], b[v], 1u << ch);
+                }
+            }
+        }
     }
 
     /// The sector kinds' traversal: binary splits (the longer side) of rip-map cells in
@@ -511,6 +608,9 @@ class Engine {
         }
         // Each lane's own sheared coordinates: a cell's channels per lane (a subset of
         // the tile's) give each lane the threshold of the sectors it can meet there.
+        f.aMax = -INFINITY;
+        for (int k = 0; k < kLanes; ++k)
+            if (t.valid >> k & 1u) f.aMax = std::max(f.aMax, float(t.a[k]));
         f.lc1 = bt == 0 ? t.pi - a * t.pj : t.pi;
         f.lc2 = bt == 0 ? t.pj : t.pj - bt * t.pi;
         const int mid1 = (f.p1min + f.p1max) / 2, mid2 = (f.p2min + f.p2max) / 2;
@@ -604,6 +704,8 @@ class Engine {
     }
 
     static constexpr int kLeafLevel = 1;
+    /// Rip cells of at most kLanes = 2^kRipLeaf texels are tested whole (RipLeaf).
+    static constexpr int kRipLeaf = std::countr_zero(unsigned(kLanes));
     static constexpr int kStack = 160;  ///< 9 roots + 3 per level below (top <= 14)
 
     const ConeSearchData& d_;
