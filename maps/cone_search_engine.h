@@ -128,7 +128,7 @@ class Engine {
                 if (d_.rips.empty())
                     Traverse(tile);
                 else
-                    TraverseRip(tile, d_.rips[size_t(d_.ripPass)]);
+                    TraverseRipPass(tile, d_.rips[size_t(d_.ripPass)]);
             }
             Finish(tile, t);
         }
@@ -442,21 +442,90 @@ class Engine {
         int32_t cx, cy;
     };
 
+    /// A rip-map pass's shear and sectors (ConeSearchData::RipMap): the channels it
+    /// serves and, per channel, the quadrant of (c1, c2) offsets that holds its sector.
+    struct RipCfg {
+        int a = 0, bt = 0;  ///< alpha, beta
+        int n = 0;          ///< channels
+        int ch[kMaxSectors] = {}, s1[kMaxSectors] = {}, s2[kMaxSectors] = {};
+    };
+
+    /// The layouts RipMapLayout makes, compiled each with its shear and signs as
+    /// constants (a pass whose rip-map matches none runs with RipCfgOf's values).
+    static constexpr RipCfg kRipCfgs[] = {
+        {0, 0, 4, {0, 1, 2, 3}, {1, -1, -1, 1}, {1, 1, -1, -1}},  // acm4
+        {1, 0, 2, {0, 4}, {1, -1}, {1, -1}},                      // acm8
+        {0, 1, 2, {1, 5}, {1, -1}, {1, -1}},
+        {0, -1, 2, {2, 6}, {-1, 1}, {1, -1}},
+        {-1, 0, 2, {3, 7}, {-1, 1}, {1, -1}},
+    };
+    static constexpr int kNumRipCfgs = int(sizeof(kRipCfgs) / sizeof(kRipCfgs[0]));
+
+    static RipCfg RipCfgOf(const ConeSearchData::RipMap& rip) {
+        RipCfg c;
+        c.a = rip.alpha;
+        c.bt = rip.beta;
+        for (uint32_t m = rip.channels; m; m &= m - 1) {
+            const int k = std::countr_zero(m);
+            c.ch[c.n] = k;
+            c.s1[c.n] = rip.sign1[size_t(k)];
+            c.s2[c.n] = rip.sign2[size_t(k)];
+            ++c.n;
+        }
+        return c;
+    }
+
+    static bool SameCfg(const RipCfg& x, const RipCfg& y) {
+        if (x.a != y.a || x.bt != y.bt || x.n != y.n) return false;
+        for (int i = 0; i < x.n; ++i)
+            if (x.ch[i] != y.ch[i] || x.s1[i] != y.s1[i] || x.s2[i] != y.s2[i])
+                return false;
+        return true;
+    }
+
+    /// The pass's traversal, compiled for its layout (kRipCfgs) where one matches.
+    void TraverseRipPass(Tile& t, const ConeSearchData::RipMap& rip) {
+        if (ripCfg_ < -1) {
+            const RipCfg c = RipCfgOf(rip);
+            ripCfg_ = -1;
+            for (int i = 0; i < kNumRipCfgs; ++i)
+                if (SameCfg(c, kRipCfgs[i])) ripCfg_ = i;
+        }
+        switch (ripCfg_) {
+            case 0:
+                TraverseRip<0>(t, rip);
+                break;
+            case 1:
+                TraverseRip<1>(t, rip);
+                break;
+            case 2:
+                TraverseRip<2>(t, rip);
+                break;
+            case 3:
+                TraverseRip<3>(t, rip);
+                break;
+            case 4:
+                TraverseRip<4>(t, rip);
+                break;
+            default:
+                TraverseRip<-1>(t, rip);
+                break;
+        }
+    }
+
     /// A tile's coordinates in a rip-map's sheared frame.
     struct RipFrame {
-        int a, bt;                       ///< the shear: alpha, beta
         int p1min, p1max, p2min, p2max;  ///< the valid lanes' range in (c1, c2)
         VI lc1, lc2;                     ///< each lane's (c1, c2)
-        float aMax;                      ///< the deepest valid apex
     };
 
     /// The lanes of `n.lanes` for which rip cell n can hold a blocker below the minimum
     /// of a sector it meets from that lane's apex; a single texel that passes is
     /// evaluated exactly here (and 0 returned: nothing is left to open).
     RS_INLINE uint32_t RipTest(Tile& t, const ConeSearchData::RipMap& rip,
-                               const RipFrame& f, const RipNode& n) {
+                               const RipCfg& cfg, const RipFrame& f, const RipNode& n) {
         const int W = d_.W, H = d_.H;
-        const int a = f.a, bt = f.bt;
+        const int a = cfg.a, bt = cfg.bt;
         const int o1 = n.t1 * W, o2 = n.t2 * H;
         const int A0 = o1 + (n.cx << n.lx),
                   A1 = o1 + std::min((n.cx + 1) << n.lx, W) - 1;  // c1 range
@@ -466,10 +535,10 @@ class Engine {
         const int lo1 = A0 - f.p1max, hi1 = A1 - f.p1min, lo2 = B0 - f.p2max,
                   hi2 = B1 - f.p2min;
         uint32_t channels = 0;
-        for (uint32_t c = rip.channels; c; c &= c - 1) {
-            const int k = std::countr_zero(c);
+        for (int i = 0; i < cfg.n; ++i) {
+            const int k = cfg.ch[i];
             // Quadrant of channel k in (c1, c2): signs from the table of the kind.
-            const int s1 = rip.sign1[size_t(k)], s2 = rip.sign2[size_t(k)];
+            const int s1 = cfg.s1[i], s2 = cfg.s2[i];
             const bool ok1 = s1 > 0 ? hi1 >= 0 : (s1 < 0 ? lo1 <= 0 : true);
             const bool ok2 = s2 > 0 ? hi2 >= 0 : (s2 < 0 ? lo2 <= 0 : true);
             if (ok1 && ok2) channels |= 1u << k;
@@ -486,9 +555,10 @@ class Engine {
                  hi2v = B1 - f.lc2;
         VF thr = VF{} - INFINITY;
         VI meets{};
-        for (uint32_t c = channels; c; c &= c - 1) {
-            const int k = std::countr_zero(c);
-            const int s1 = rip.sign1[size_t(k)], s2 = rip.sign2[size_t(k)];
+        for (int i = 0; i < cfg.n; ++i) {
+            const int k = cfg.ch[i];
+            if (!(channels >> k & 1u)) continue;
+            const int s1 = cfg.s1[i], s2 = cfg.s2[i];
             VI ok = VI{} - 1;
             if (s1 > 0) ok &= hi1v >= 0;
             if (s1 < 0) ok &= lo1v <= 0;
@@ -510,7 +580,7 @@ class Engine {
             return 0;
         }
         if (lanes && n.lx + n.ly <= kRipLeaf) {
-            RipLeaf(t, rip, f, n.lx, A0, A1, B0, B1, o1, o2, channels, lanes);
+            RipLeaf(t, rip, cfg, f, n.lx, A0, A1, B0, B1, o1, o2, lanes);
             return 0;
         }
         return lanes;
@@ -521,9 +591,9 @@ class Engine {
     /// vector's elements, and each lane in turn tests them all (its offsets, the sector
     /// of each of the pass's channels (a quadrant of (c1, c2) offsets), the float test);
     /// the texels that pass are evaluated exactly.
-    RS_INLINE void RipLeaf(Tile& t, const ConeSearchData::RipMap& rip, const RipFrame& f,
-                           int lx, int A0, int A1, int B0, int B1, int o1, int o2,
-                           uint32_t channels, uint32_t lanes) {
+    RS_INLINE void RipLeaf(Tile& t, const ConeSearchData::RipMap& rip, const RipCfg& cfg,
+                           const RipFrame& f, int lx, int A0, int A1, int B0, int B1,
+                           int o1, int o2, uint32_t lanes) {
         // Element v is texel (A0 + v % 2^lx, B0 + v / 2^lx) of the cell (clipped:
         // elements outside it have depth +inf, never a blocker).
         const int w = A1 - A0 + 1, h = B1 - B0 + 1;
@@ -536,7 +606,7 @@ class Engine {
         VF b;
         __builtin_memcpy(&b, depth, sizeof(b));
         const VI c1 = A0 + (kIota & ((1 << lx) - 1)), c2 = B0 + (kIota >> lx);
-        const VI X = c1 + f.a * c2, Y = c2 + f.bt * c1;
+        const VI X = c1 + cfg.a * c2, Y = c2 + cfg.bt * c1;
         for (; lanes; lanes &= lanes - 1) {
             const int k = std::countr_zero(lanes);
             const float ak = t.a[k];
@@ -553,9 +623,9 @@ class Engine {
                                (dy >= -g_.halfY) & (dy <= g_.halfY);
             VF q{};
             bool haveQ = false;
-            for (uint32_t c = channels; c; c &= c - 1) {
-                const int ch = std::countr_zero(c);
-                const int s1 = rip.sign1[size_t(ch)], s2 = rip.sign2[size_t(ch)];
+            for (int i = 0; i < cfg.n; ++i) {
+                const int ch = cfg.ch[i];
+                const int s1 = cfg.s1[i], s2 = cfg.s2[i];
                 VI ok = (tiny | ~(s >= t.thr[ch][k] * d2)) & blocker;
                 if (s1 > 0) ok &= off1 >= 0;
                 if (s1 < 0) ok &= off1 <= 0;
@@ -589,12 +659,14 @@ class Engine {
     /// (c1, c2) offsets; per lane, a cell is tested against the sectors it meets from
     /// that lane's apex only. A cell's two halves are tested together when it is split,
     /// and only those that pass are pushed.
+    template <int C>
     void TraverseRip(Tile& t, const ConeSearchData::RipMap& rip) {
+        RipCfg dyn;
+        if constexpr (C < 0) dyn = RipCfgOf(rip);
+        const RipCfg& cfg = C < 0 ? dyn : kRipCfgs[C < 0 ? 0 : C];
         const int W = d_.W, H = d_.H;
         RipFrame f;
-        f.a = rip.alpha;
-        f.bt = rip.beta;
-        const int a = f.a, bt = f.bt;
+        const int a = cfg.a, bt = cfg.bt;
         // Lanes in sheared coordinates: c1 = X - alpha * c2 (beta = 0) or c1 = X (beta !=
         // 0, c2 = Y - beta * X); their range over the tile.
         f.p1min = INT32_MAX, f.p1max = INT32_MIN, f.p2min = INT32_MAX,
@@ -608,9 +680,6 @@ class Engine {
         }
         // Each lane's own sheared coordinates: a cell's channels per lane (a subset of
         // the tile's) give each lane the threshold of the sectors it can meet there.
-        f.aMax = -INFINITY;
-        for (int k = 0; k < kLanes; ++k)
-            if (t.valid >> k & 1u) f.aMax = std::max(f.aMax, float(t.a[k]));
         f.lc1 = bt == 0 ? t.pi - a * t.pj : t.pi;
         f.lc2 = bt == 0 ? t.pj : t.pj - bt * t.pi;
         const int mid1 = (f.p1min + f.p1max) / 2, mid2 = (f.p2min + f.p2max) / 2;
@@ -628,7 +697,7 @@ class Engine {
                           uint16_t(t.valid),
                           0,
                           0};
-                r.lanes = uint16_t(RipTest(t, rip, f, r));
+                r.lanes = uint16_t(RipTest(t, rip, cfg, f, r));
                 if (r.lanes) stack[sp++] = r;
             }
         RipNode n;
@@ -663,8 +732,8 @@ class Engine {
             RipNode& nearC = nearFirst0 ? c0 : c1;
             RipNode& farC = nearFirst0 ? c1 : c0;
             if (!has1) c1.lanes = 0;
-            nearC.lanes = nearC.lanes ? uint16_t(RipTest(t, rip, f, nearC)) : 0;
-            farC.lanes = farC.lanes ? uint16_t(RipTest(t, rip, f, farC)) : 0;
+            nearC.lanes = nearC.lanes ? uint16_t(RipTest(t, rip, cfg, f, nearC)) : 0;
+            farC.lanes = farC.lanes ? uint16_t(RipTest(t, rip, cfg, f, farC)) : 0;
             if (farC.lanes) stack[sp++] = farC;
             have = nearC.lanes != 0;
             if (have) n = nearC;
@@ -702,6 +771,8 @@ class Engine {
                     t.argX[c][k], t.argY[c][k]};
             }
     }
+
+    int ripCfg_ = -2;  ///< the pass's layout in kRipCfgs, -1 none, -2 not yet known
 
     static constexpr int kLeafLevel = 1;
     /// Rip cells of at most kLanes = 2^kRipLeaf texels are tested whole (RipLeaf).

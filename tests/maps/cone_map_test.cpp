@@ -96,9 +96,8 @@ TEST(ConeMap, FastEqualsBruteForceAt128) {
 }
 
 TEST(ConeMap, NonSquareAndOddSizesMatchBruteForce) {
-    for (auto [w, h] :
-         {std::pair{24, 40}, std::pair{33, 17}, std::pair{1, 9}, std::pair{5, 5},
-          std::pair{37, 37}}) {
+    for (auto [w, h] : {std::pair{24, 40}, std::pair{33, 17}, std::pair{1, 9},
+                        std::pair{5, 5}, std::pair{37, 37}}) {
         const DepthField hf = RandomField(w, h, 3, true);
         for (ConeKind k :
              {ConeKind::Cone, ConeKind::Acm8, ConeKind::Quad, ConeKind::RelaxedExact})
