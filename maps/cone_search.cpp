@@ -107,7 +107,7 @@ void BuildRipMap(const ConeSearchData& d, ConeSearchData::RipMap& rip) {
         }
     rip.mins.resize(off);
     const DepthField& hf = *d.field;
-    const int a = rip.alpha, b = rip.beta;
+    const int a = rip.Layout().alpha, b = rip.Layout().beta;
     tbb::parallel_for(tbb::blocked_range<int>(0, H, 64),
                       [&](const tbb::blocked_range<int>& r) {
                           for (int c2 = r.begin(); c2 < r.end(); ++c2)
@@ -155,30 +155,18 @@ void BuildRipMap(const ConeSearchData& d, ConeSearchData::RipMap& rip) {
 std::vector<ConeSearchData::RipMap> RipMapLayout(ConeKind sectors, int W, int H) {
     using Rip = ConeSearchData::RipMap;
     std::vector<Rip> rips;
-    auto add = [&](int alpha, int beta, std::initializer_list<std::array<int, 3>> ch) {
+    auto add = [&](int layout) {
         Rip r;
-        r.alpha = alpha;
-        r.beta = beta;
-        for (const auto& c : ch) {
-            r.channels |= 1u << c[0];
-            r.sign1[size_t(c[0])] = int8_t(c[1]);
-            r.sign2[size_t(c[0])] = int8_t(c[2]);
-        }
+        r.layout = layout;
         rips.push_back(std::move(r));
     };
     switch (sectors) {
-        case ConeKind::Acm4:  // closed quadrants
-            add(0, 0, {{0, 1, 1}, {1, -1, 1}, {2, -1, -1}, {3, 1, -1}});
+        case ConeKind::Acm4:
+            add(kRipLayoutAcm4);
             break;
         case ConeKind::Acm8:
             if (W != H) break;
-            // Each pair of opposite 45-degree sectors is a pair of quadrants of one
-            // shear: s = X - Y for sectors 0, 4 (edges: the x axis and the diagonal), t =
-            // Y - X for 1, 5, t = Y + X for 2, 6, s = X + Y for 3, 7.
-            add(1, 0, {{0, 1, 1}, {4, -1, -1}});
-            add(0, 1, {{1, 1, 1}, {5, -1, -1}});
-            add(0, -1, {{2, -1, 1}, {6, 1, -1}});
-            add(-1, 0, {{3, -1, 1}, {7, 1, -1}});
+            for (int i = 0; i < 4; ++i) add(kRipLayoutAcm8 + i);
             break;
         default:
             break;
@@ -274,8 +262,8 @@ void RunConeSearch(const ConeSearchJob& job, ProgressCounter* progress) {
     // Only the pass's rip-map is held (4 W H floats): built before it, freed after.
     for (int pass = 0; pass < passes; ++pass) {
         d.ripPass = pass;
-        d.passChannels =
-            d.rips.empty() ? (1u << d.nChannels) - 1u : d.rips[size_t(pass)].channels;
+        d.passChannels = d.rips.empty() ? (1u << d.nChannels) - 1u
+                                        : d.rips[size_t(pass)].Layout().Channels();
         if (!d.rips.empty()) BuildRipMap(d, d.rips[size_t(pass)]);
         tbb::parallel_for(tbb::blocked_range<int>(0, (tileRows + kBand - 1) / kBand, 1),
                           [&](const tbb::blocked_range<int>& r) {

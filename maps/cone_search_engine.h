@@ -8,6 +8,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "maps/cone_search_lanes.h"
@@ -442,75 +443,12 @@ class Engine {
         int32_t cx, cy;
     };
 
-    /// A rip-map pass's shear and sectors (ConeSearchData::RipMap): the channels it
-    /// serves and, per channel, the quadrant of (c1, c2) offsets that holds its sector.
-    struct RipCfg {
-        int a = 0, bt = 0;  ///< alpha, beta
-        int n = 0;          ///< channels
-        int ch[kMaxSectors] = {}, s1[kMaxSectors] = {}, s2[kMaxSectors] = {};
-    };
-
-    /// The layouts RipMapLayout makes, compiled each with its shear and signs as
-    /// constants (a pass whose rip-map matches none runs with RipCfgOf's values).
-    static constexpr RipCfg kRipCfgs[] = {
-        {0, 0, 4, {0, 1, 2, 3}, {1, -1, -1, 1}, {1, 1, -1, -1}},  // acm4
-        {1, 0, 2, {0, 4}, {1, -1}, {1, -1}},                      // acm8
-        {0, 1, 2, {1, 5}, {1, -1}, {1, -1}},
-        {0, -1, 2, {2, 6}, {-1, 1}, {1, -1}},
-        {-1, 0, 2, {3, 7}, {-1, 1}, {1, -1}},
-    };
-    static constexpr int kNumRipCfgs = int(sizeof(kRipCfgs) / sizeof(kRipCfgs[0]));
-
-    static RipCfg RipCfgOf(const ConeSearchData::RipMap& rip) {
-        RipCfg c;
-        c.a = rip.alpha;
-        c.bt = rip.beta;
-        for (uint32_t m = rip.channels; m; m &= m - 1) {
-            const int k = std::countr_zero(m);
-            c.ch[c.n] = k;
-            c.s1[c.n] = rip.sign1[size_t(k)];
-            c.s2[c.n] = rip.sign2[size_t(k)];
-            ++c.n;
-        }
-        return c;
-    }
-
-    static bool SameCfg(const RipCfg& x, const RipCfg& y) {
-        if (x.a != y.a || x.bt != y.bt || x.n != y.n) return false;
-        for (int i = 0; i < x.n; ++i)
-            if (x.ch[i] != y.ch[i] || x.s1[i] != y.s1[i] || x.s2[i] != y.s2[i])
-                return false;
-        return true;
-    }
-
-    /// The pass's traversal, compiled for its layout (kRipCfgs) where one matches.
+    /// The pass's traversal, compiled for its rip-map's layout.
     void TraverseRipPass(Tile& t, const ConeSearchData::RipMap& rip) {
-        if (ripCfg_ < -1) {
-            const RipCfg c = RipCfgOf(rip);
-            ripCfg_ = -1;
-            for (int i = 0; i < kNumRipCfgs; ++i)
-                if (SameCfg(c, kRipCfgs[i])) ripCfg_ = i;
+        [&]<int... L>(std::integer_sequence<int, L...>) {
+            ((rip.layout == L ? (TraverseRip<L>(t, rip), 0) : 0), ...);
         }
-        switch (ripCfg_) {
-            case 0:
-                TraverseRip<0>(t, rip);
-                break;
-            case 1:
-                TraverseRip<1>(t, rip);
-                break;
-            case 2:
-                TraverseRip<2>(t, rip);
-                break;
-            case 3:
-                TraverseRip<3>(t, rip);
-                break;
-            case 4:
-                TraverseRip<4>(t, rip);
-                break;
-            default:
-                TraverseRip<-1>(t, rip);
-                break;
-        }
+        (std::make_integer_sequence<int, kNumRipLayouts>{});
     }
 
     /// A tile's coordinates in a rip-map's sheared frame.
@@ -523,9 +461,10 @@ class Engine {
     /// of a sector it meets from that lane's apex; a single texel that passes is
     /// evaluated exactly here (and 0 returned: nothing is left to open).
     RS_INLINE uint32_t RipTest(Tile& t, const ConeSearchData::RipMap& rip,
-                               const RipCfg& cfg, const RipFrame& f, const RipNode& n) {
+                               const RipLayout& cfg, const RipFrame& f,
+                               const RipNode& n) {
         const int W = d_.W, H = d_.H;
-        const int a = cfg.a, bt = cfg.bt;
+        const int a = cfg.alpha, bt = cfg.beta;
         const int o1 = n.t1 * W, o2 = n.t2 * H;
         const int A0 = o1 + (n.cx << n.lx),
                   A1 = o1 + std::min((n.cx + 1) << n.lx, W) - 1;  // c1 range
@@ -591,9 +530,9 @@ class Engine {
     /// vector's elements, and each lane in turn tests them all (its offsets, the sector
     /// of each of the pass's channels (a quadrant of (c1, c2) offsets), the float test);
     /// the texels that pass are evaluated exactly.
-    RS_INLINE void RipLeaf(Tile& t, const ConeSearchData::RipMap& rip, const RipCfg& cfg,
-                           const RipFrame& f, int lx, int A0, int A1, int B0, int B1,
-                           int o1, int o2, uint32_t lanes) {
+    RS_INLINE void RipLeaf(Tile& t, const ConeSearchData::RipMap& rip,
+                           const RipLayout& cfg, const RipFrame& f, int lx, int A0,
+                           int A1, int B0, int B1, int o1, int o2, uint32_t lanes) {
         // Element v is texel (A0 + v % 2^lx, B0 + v / 2^lx) of the cell (clipped:
         // elements outside it have depth +inf, never a blocker).
         const int w = A1 - A0 + 1, h = B1 - B0 + 1;
@@ -606,7 +545,7 @@ class Engine {
         VF b;
         __builtin_memcpy(&b, depth, sizeof(b));
         const VI c1 = A0 + (kIota & ((1 << lx) - 1)), c2 = B0 + (kIota >> lx);
-        const VI X = c1 + cfg.a * c2, Y = c2 + cfg.bt * c1;
+        const VI X = c1 + cfg.alpha * c2, Y = c2 + cfg.beta * c1;
         for (; lanes; lanes &= lanes - 1) {
             const int k = std::countr_zero(lanes);
             const float ak = t.a[k];
@@ -659,14 +598,12 @@ class Engine {
     /// (c1, c2) offsets; per lane, a cell is tested against the sectors it meets from
     /// that lane's apex only. A cell's two halves are tested together when it is split,
     /// and only those that pass are pushed.
-    template <int C>
+    template <int L>
     void TraverseRip(Tile& t, const ConeSearchData::RipMap& rip) {
-        RipCfg dyn;
-        if constexpr (C < 0) dyn = RipCfgOf(rip);
-        const RipCfg& cfg = C < 0 ? dyn : kRipCfgs[C < 0 ? 0 : C];
+        constexpr const RipLayout& cfg = kRipLayouts[L];
         const int W = d_.W, H = d_.H;
         RipFrame f;
-        const int a = cfg.a, bt = cfg.bt;
+        const int a = cfg.alpha, bt = cfg.beta;
         // Lanes in sheared coordinates: c1 = X - alpha * c2 (beta = 0) or c1 = X (beta !=
         // 0, c2 = Y - beta * X); their range over the tile.
         f.p1min = INT32_MAX, f.p1max = INT32_MIN, f.p2min = INT32_MAX,
@@ -771,8 +708,6 @@ class Engine {
                     t.argX[c][k], t.argY[c][k]};
             }
     }
-
-    int ripCfg_ = -2;  ///< the pass's layout in kRipCfgs, -1 none, -2 not yet known
 
     static constexpr int kLeafLevel = 1;
     /// Rip cells of at most kLanes = 2^kRipLeaf texels are tested whole (RipLeaf).

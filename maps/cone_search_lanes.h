@@ -13,6 +13,35 @@
 
 namespace reliefsim::detail {
 
+/// A rip-map's layout: its shear (real texel X = c1 + alpha * c2, Y = c2 + beta * c1)
+/// and the sectors (channels) it serves, each a quadrant of (c1, c2) offsets given by
+/// its signs: +1 (>= 0), -1 (<= 0) or 0 (either) per coordinate.
+struct RipLayout {
+    int alpha = 0, beta = 0;
+    int n = 0;  ///< sectors served
+    int ch[kMaxSectors] = {}, s1[kMaxSectors] = {}, s2[kMaxSectors] = {};
+    constexpr uint32_t Channels() const {
+        uint32_t m = 0;
+        for (int i = 0; i < n; ++i) m |= 1u << ch[i];
+        return m;
+    }
+};
+
+/// Every rip-map layout (RipMapLayout picks them; the engine is compiled once per
+/// layout, with its shear and signs as constants). acm4: the closed quadrants, one
+/// rip-map. acm8: each pair of opposite 45-degree sectors is a pair of quadrants of one
+/// shear: c1 = X - Y for sectors 0, 4 (edges: the x axis and the diagonal), c2 = Y - X
+/// for 1, 5, c2 = Y + X for 2, 6, c1 = X + Y for 3, 7.
+inline constexpr RipLayout kRipLayouts[] = {
+    {0, 0, 4, {0, 1, 2, 3}, {1, -1, -1, 1}, {1, 1, -1, -1}},
+    {1, 0, 2, {0, 4}, {1, -1}, {1, -1}},
+    {0, 1, 2, {1, 5}, {1, -1}, {1, -1}},
+    {0, -1, 2, {2, 6}, {-1, 1}, {1, -1}},
+    {-1, 0, 2, {3, 7}, {-1, 1}, {1, -1}},
+};
+inline constexpr int kNumRipLayouts = int(sizeof(kRipLayouts) / sizeof(kRipLayouts[0]));
+inline constexpr int kRipLayoutAcm4 = 0, kRipLayoutAcm8 = 1;  ///< acm8: 1 to 4
+
 /// Everything a band of tiles reads, prepared once by RunConeSearch.
 struct ConeSearchData {
     const DepthField* field = nullptr;
@@ -30,15 +59,12 @@ struct ConeSearchData {
     std::vector<uint8_t> flags;  ///< limiting: per texel, bit ClassBit(sx, sy) set when
                                  ///< the neighbour (i + sx, j + sy) is strictly deeper
     /// Sector kinds: rip-maps (min over every aligned 2^lx x 2^ly rectangle) in sheared
-    /// coordinates (c1, c2), real texel X = c1 + alpha * c2, Y = c2 + beta * c1, chosen
-    /// so that the edges of the sectors each serves are lines c1 = const and c2 = const:
-    /// a cell then never straddles them for long (RipCells).
+    /// coordinates (c1, c2) (RipLayout), chosen so that the edges of the sectors each
+    /// serves are lines c1 = const and c2 = const: a cell then never straddles them for
+    /// long.
     struct RipMap {
-        int alpha = 0, beta = 0;
-        uint32_t channels = 0;  ///< the sectors it serves
-        /// Per channel, the quadrant of (c1, c2) offsets that holds its sector: +1 (>=
-        /// 0), -1 (<= 0) or 0 (either) per coordinate.
-        std::array<int8_t, kMaxSectors> sign1{}, sign2{};
+        int layout = 0;  ///< in kRipLayouts
+        const RipLayout& Layout() const { return kRipLayouts[layout]; }
         int levelsX = 0, levelsY = 0;
         std::vector<int> cellsX, cellsY;  ///< per level
         std::vector<size_t> offset;       ///< per (lx, ly): lx * (levelsY + 1) + ly
