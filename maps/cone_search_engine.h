@@ -560,17 +560,23 @@ class Engine {
             // below is taken over texels it evaluates).
             const VI blocker = (ak > b) & (dx >= -g_.halfX) & (dx <= g_.halfX) &
                                (dy >= -g_.halfY) & (dy <= g_.halfY);
+            VI ok[kMaxSectors], any{};
+            for (int i = 0; i < cfg.n; ++i) {
+                const int ch = cfg.ch[i];
+                const int s1 = cfg.s1[i], s2 = cfg.s2[i];
+                ok[i] = (tiny | ~(s >= t.thr[ch][k] * d2)) & blocker;
+                if (s1 > 0) ok[i] &= off1 >= 0;
+                if (s1 < 0) ok[i] &= off1 <= 0;
+                if (s2 > 0) ok[i] &= off2 >= 0;
+                if (s2 < 0) ok[i] &= off2 <= 0;
+                any |= ok[i];
+            }
+            if (!Bits(any)) continue;
             VF q{};
             bool haveQ = false;
             for (int i = 0; i < cfg.n; ++i) {
                 const int ch = cfg.ch[i];
-                const int s1 = cfg.s1[i], s2 = cfg.s2[i];
-                VI ok = (tiny | ~(s >= t.thr[ch][k] * d2)) & blocker;
-                if (s1 > 0) ok &= off1 >= 0;
-                if (s1 < 0) ok &= off1 <= 0;
-                if (s2 > 0) ok &= off2 >= 0;
-                if (s2 < 0) ok &= off2 <= 0;
-                uint32_t pass = Bits(ok);
+                uint32_t pass = Bits(ok[i]);
                 if (!pass) continue;
                 if (pass & (pass - 1)) {
                     // Several: only those within rounding of the least float q can be
