@@ -614,6 +614,15 @@ struct RelaxedBest {
     bool found = false;
 };
 
+/// Per texel, over the windows of the search's groups starting there (4x4 quarters, 8x8
+/// tiles, 32x32 super-tiles): the least and the greatest depth; and (1 - b) / b of the
+/// texel's own depth b, rounded down (0 where b = 0).
+struct DepthWindows {
+    std::vector<float> min4, min8, min32;
+    std::vector<float> max4, max8, max32;
+    std::vector<float> shallow;
+};
+
 /// The pruned search of one (source texel, apex): the listing's ratio of every pair that
 /// survives the bounds, tile group by tile group. Pruning is exact (the distance bound
 /// below the listing's float bound, for offsets and whole groups, and the exit bound): a
@@ -625,13 +634,7 @@ struct RelaxedSearch {
     const DepthField& hf;
     const TiledOffsets& to;
     const RelaxedGroups& groups;
-    const std::vector<float>& win;      ///< depth minima over the 8x8 windows
-    const std::vector<float>& win32;    ///< ... 32x32 windows
-    const std::vector<float>& win4;     ///< ... 4x4 windows
-    const std::vector<float>& max8;     ///< depth maxima over the 8x8 windows
-    const std::vector<float>& max32;    ///< ... 32x32 windows
-    const std::vector<float>& max4;     ///< ... 4x4 windows
-    const std::vector<float>& shallow;  ///< per texel (1 - b) / b rounded down
+    const DepthWindows& dw;
     const ExitField& ef;
     int steps;  ///< the listing's search steps
     float inv;  ///< PowerOfTwoInverse(steps)
@@ -645,21 +648,12 @@ struct RelaxedSearch {
     RelaxedBest rb;
 
     RelaxedSearch(const DepthField& hf, const TiledOffsets& to,
-                  const RelaxedGroups& groups, const std::vector<float>& win,
-                  const std::vector<float>& win32, const std::vector<float>& win4,
-                  const std::vector<float>& max8, const std::vector<float>& max32,
-                  const std::vector<float>& max4, const std::vector<float>& shallow,
+                  const RelaxedGroups& groups, const DepthWindows& dw,
                   const ExitField& ef, int steps, float inv, float dmin, int halfX)
         : hf(hf),
           to(to),
           groups(groups),
-          win(win),
-          win32(win32),
-          win4(win4),
-          max8(max8),
-          max32(max32),
-          max4(max4),
-          shallow(shallow),
+          dw(dw),
           ef(ef),
           steps(steps),
           inv(inv),
@@ -712,7 +706,7 @@ struct RelaxedSearch {
             // v, the scale and the step within the factors: RelaxedOffset::stepK, and
             // (1 - b) / b rounded down per texel).
             if (!(b > 0.0f)) return true;  // the listing gives NaN: ignored
-            const double stepLo = double(off.stepK) * double(shallow[dst]);
+            const double stepLo = double(off.stepK) * double(dw.shallow[dst]);
             if (ExitBoundPrunes(ef, double(off.dist), double(off.invD), db, double(lp),
                                 dApex, double(rb.best), stepLo))
                 return true;
@@ -733,7 +727,7 @@ struct RelaxedSearch {
             const RelaxedGroup& q = t.quarter[k];
             if (q.begin == q.end) continue;
             const size_t w4 = rowBase[(k >> 1) * 4] + size_t(col[(k & 1) * 4]);
-            if (GroupPrunes(q, w4, win4[w4], max4[w4], ef.Lwin4)) continue;
+            if (GroupPrunes(q, w4, dw.min4[w4], dw.max4[w4], ef.Lwin4)) continue;
             for (int o = q.begin; o < q.end; ++o) {
                 const RelaxedOffset& off = groups.offs[size_t(o)];
                 const size_t dst = rowBase[off.ly] + size_t(col[off.lx]);
@@ -753,7 +747,7 @@ struct RelaxedSearch {
             if (t.all.distLo >= double(rb.best) * reachAll) break;  // sorted by distance
             const int wx = WrapNear(i + t.all.ox, W), wy = WrapNear(j + t.all.oy, H);
             const size_t w0 = size_t(wy) * size_t(W) + size_t(wx);
-            if (GroupPrunes(t.all, w0, win[w0], max8[w0], ef.Lwin)) continue;
+            if (GroupPrunes(t.all, w0, dw.min8[w0], dw.max8[w0], ef.Lwin)) continue;
             SearchTile(t, wx, wy);
         }
     }
@@ -789,7 +783,7 @@ struct RelaxedSearch {
             if (sb.distLo >= double(rb.best) * reachAll) break;  // sorted by distance
             const size_t ws = size_t(WrapNear(j + sb.oy, H)) * size_t(W) +
                               size_t(WrapNear(i + sb.ox, W));
-            if (GroupPrunes(sb, ws, win32[ws], max32[ws], ef.Lwin32)) continue;
+            if (GroupPrunes(sb, ws, dw.min32[ws], dw.max32[ws], ef.Lwin32)) continue;
             SearchSuperTile(si, reachAll);
         }
         return rb;
@@ -804,21 +798,27 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
     const int W = hf.width, H = hf.height, K = out.K;
     // Depth maxima over 4x4, 8x8 and 32x32 windows (the exit field's build and the
     // group bounds both use them).
-    const std::vector<float> max4 = WindowMaxima(hf.depth, W, H, 4);
-    const std::vector<float> max8 = WindowMaxima(max4, W, H, 2, 4);
-    const std::vector<float> max32 = WindowMaxima(max8, W, H, kSuperTile, kTile);
+    DepthWindows dw;
+    dw.max4 = WindowMaxima(hf.depth, W, H, 4);
+    dw.max8 = WindowMaxima(dw.max4, W, H, 2, 4);
+    dw.max32 = WindowMaxima(dw.max8, W, H, kSuperTile, kTile);
     // The exit field before the offsets and the other windows: its build's scratch is
     // freed before they are made (peak memory at 2048²).
     const float inv = PowerOfTwoInverse(p.searchSteps);
-    const ExitField ef = BuildExitField(hf, p.searchSteps, inv, exitField, max8, max32);
+    const ExitField ef =
+        BuildExitField(hf, p.searchSteps, inv, exitField, dw.max8, dw.max32);
     TiledOffsets to = MakeTiledOffsets(g, ConeKind::Cone);
-    SearchWindows sw;  // depth minima over 8x8 and 32x32 windows, as the tiled search's
-    MakeSearchWindows(hf, sw);
-    const std::vector<float> win4 = WindowMinima(hf.depth, W, H, 1, 4);
-    std::vector<float> shallow(hf.depth.size(), 0.0f);
-    for (size_t t = 0; t < shallow.size(); ++t) {
+    {
+        SearchWindows sw;  // depth minima over 8x8 and 32x32 windows (the tiled search's)
+        MakeSearchWindows(hf, sw);
+        dw.min8 = std::move(sw.win8);
+        dw.min32 = std::move(sw.win32);
+    }
+    dw.min4 = WindowMinima(hf.depth, W, H, 1, 4);
+    dw.shallow.assign(hf.depth.size(), 0.0f);
+    for (size_t t = 0; t < dw.shallow.size(); ++t) {
         const double b = double(hf.depth[t]);
-        if (b > 0) shallow[t] = FloatAtMost((1.0 - b) / b);
+        if (b > 0) dw.shallow[t] = FloatAtMost((1.0 - b) / b);
     }
     RelaxedGroups groups;
     GroupTileOffsets(to, g, W, H, p.searchSteps, groups);
@@ -827,8 +827,8 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
     ProgressCounter progress(p.progress, H);
     tbb::parallel_for(
         tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& rows) {
-            RelaxedSearch search(hf, to, groups, sw.win8, sw.win32, win4, max8, max32,
-                                 max4, shallow, ef, p.searchSteps, inv, dmin, g.halfX);
+            RelaxedSearch search(hf, to, groups, dw, ef, p.searchSteps, inv, dmin,
+                                 g.halfX);
             for (int j = rows.begin(); j < rows.end(); ++j, progress.Add(1)) {
                 int seedDx[16] = {}, seedDy[16] = {};
                 bool seedOk[16] = {};
