@@ -367,6 +367,49 @@ class Engine {
                ((dd < kTiny) | ~(s >= thr * (dd * dd)));
     }
 
+    /// The lanes of `n.lanes` for which quadtree cell n can hold a blocker below one of
+    /// its channels' minima; a leaf (2x2 texels) that passes is searched here, texel by
+    /// texel (and 0 returned).
+    RS_INLINE uint32_t NodeTest(Tile& t, const Node& n, int xMax, int yMax) {
+        const int W = d_.W, H = d_.H;
+        const int l = n.level;
+        const int ox = n.tx * W, oy = n.ty * H;
+        const int X0 = ox + (n.cx << l), X1 = ox + std::min((n.cx + 1) << l, W) - 1;
+        const int Y0 = oy + (n.cy << l), Y1 = oy + std::min((n.cy + 1) << l, H) - 1;
+        const size_t cell = d_.levelOff[size_t(l)] +
+                            size_t(n.cy) * size_t(d_.levelW[size_t(l)]) + size_t(n.cx);
+        const uint32_t channels =
+            d_.nChannels == 1
+                ? 1u
+                : ChannelsOfRect(d_, X0 - xMax, X1 - t.x0, Y0 - yMax, Y1 - t.y0);
+        if (!channels) return 0;
+        float m;
+        if (d_.limiting) {
+            uint32_t cls = ClassesOfRect(X0 - xMax, X1 - t.x0, Y0 - yMax, Y1 - t.y0);
+            m = INFINITY;
+            for (; cls; cls &= cls - 1)
+                m = std::min(
+                    m,
+                    d_.pyramids[size_t(std::countr_zero(cls)) * d_.pyramidSize + cell]);
+        } else {
+            m = d_.pyramids[cell];
+        }
+        const uint32_t lanes = NodeLanes(t, X0, X1, Y0, Y1, m, channels) & n.lanes;
+        if (!lanes || l > kLeafLevel) return lanes;
+        for (int Y = Y0; Y <= Y1; ++Y)
+            for (int X = X0; X <= X1; ++X) {
+                const size_t at = size_t(Y - oy) * size_t(W) + size_t(X - ox);
+                const float b = d_.field->depth[at];
+                uint32_t pass =
+                    TexelLanes(t, X, Y, b, d_.limiting ? d_.flags[at] : 0) & lanes;
+                for (; pass; pass &= pass - 1) Exact(t, std::countr_zero(pass), X, Y, b);
+            }
+        return 0;
+    }
+
+    /// The quadtree's traversal: a cell's four children are tested together when it is
+    /// opened, and those that pass are pushed, the nearest to the tile's centre last
+    /// (searched first).
     void Traverse(Tile& t) {
         const int W = d_.W, H = d_.H;
         // The offsets of the tile's lanes to a box span [X0 - xMax, X1 - x0] (superset).
@@ -375,65 +418,39 @@ class Engine {
         const int cx = t.x0 + kTileW / 2, cy = t.y0 + kTileH / 2;
         Node stack[kStack];
         int sp = 0;
-        // The nine wrap images of the root, the one holding the tile popped first.
+        // The nine wrap images of the root, the one holding the tile searched first.
         for (int ty = -1; ty <= 1; ++ty)
-            for (int tx = -1; tx <= 1; ++tx)
-                if (tx != 0 || ty != 0)
-                    stack[sp++] = {int8_t(d_.top),    int8_t(tx), int8_t(ty),
-                                   uint16_t(t.valid), 0,          0};
-        stack[sp++] = {int8_t(d_.top), 0, 0, uint16_t(t.valid), 0, 0};
+            for (int tx = -1; tx <= 1; ++tx) {
+                if (tx == 0 && ty == 0) continue;
+                Node r{int8_t(d_.top), int8_t(tx), int8_t(ty), uint16_t(t.valid), 0, 0};
+                r.lanes = uint16_t(NodeTest(t, r, xMax, yMax));
+                if (r.lanes) stack[sp++] = r;
+            }
+        {
+            Node r{int8_t(d_.top), 0, 0, uint16_t(t.valid), 0, 0};
+            r.lanes = uint16_t(NodeTest(t, r, xMax, yMax));
+            if (r.lanes) stack[sp++] = r;
+        }
         while (sp) {
             const Node n = stack[--sp];
-            const int l = n.level;
             const int ox = n.tx * W, oy = n.ty * H;
-            const int X0 = ox + (n.cx << l), X1 = ox + std::min((n.cx + 1) << l, W) - 1;
-            const int Y0 = oy + (n.cy << l), Y1 = oy + std::min((n.cy + 1) << l, H) - 1;
-            const size_t cell = d_.levelOff[size_t(l)] +
-                                size_t(n.cy) * size_t(d_.levelW[size_t(l)]) +
-                                size_t(n.cx);
-            const uint32_t channels =
-                d_.nChannels == 1
-                    ? 1u
-                    : ChannelsOfRect(d_, X0 - xMax, X1 - t.x0, Y0 - yMax, Y1 - t.y0);
-            if (!channels) continue;
-            float m;
-            if (d_.limiting) {
-                uint32_t cls = ClassesOfRect(X0 - xMax, X1 - t.x0, Y0 - yMax, Y1 - t.y0);
-                m = INFINITY;
-                for (; cls; cls &= cls - 1)
-                    m = std::min(
-                        m, d_.pyramids[size_t(std::countr_zero(cls)) * d_.pyramidSize +
-                                       cell]);
-            } else {
-                m = d_.pyramids[cell];
-            }
-            const uint32_t lanes = NodeLanes(t, X0, X1, Y0, Y1, m, channels) & n.lanes;
-            if (!lanes) continue;
-            if (l <= kLeafLevel) {
-                for (int Y = Y0; Y <= Y1; ++Y)
-                    for (int X = X0; X <= X1; ++X) {
-                        const size_t at = size_t(Y - oy) * size_t(W) + size_t(X - ox);
-                        const float b = d_.field->depth[at];
-                        uint32_t pass =
-                            TexelLanes(t, X, Y, b, d_.limiting ? d_.flags[at] : 0) &
-                            lanes;
-                        for (; pass; pass &= pass - 1)
-                            Exact(t, std::countr_zero(pass), X, Y, b);
-                    }
-                continue;
-            }
-            // Children, the one nearest the tile's centre pushed last (searched first).
-            const int cl = l - 1;
+            // Children, nearest to the tile's centre first.
+            const int cl = n.level - 1;
             const int mx = ox + ((2 * n.cx + 1) << cl), my = oy + ((2 * n.cy + 1) << cl);
             const int qx = cx < mx ? 0 : 1, qy = cy < my ? 0 : 1;
             const int order[4][2] = {
-                {1 - qx, 1 - qy}, {qx, 1 - qy}, {1 - qx, qy}, {qx, qy}};
+                {qx, qy}, {1 - qx, qy}, {qx, 1 - qy}, {1 - qx, 1 - qy}};
+            Node child[4];
+            int nc = 0;
             for (const auto& o : order) {
                 const int ccx = 2 * n.cx + o[0], ccy = 2 * n.cy + o[1];
                 if (ccx >= d_.levelW[size_t(cl)] || ccy >= d_.levelH[size_t(cl)])
                     continue;
-                stack[sp++] = {int8_t(cl), n.tx, n.ty, uint16_t(lanes), ccx, ccy};
+                Node c{int8_t(cl), n.tx, n.ty, n.lanes, ccx, ccy};
+                c.lanes = uint16_t(NodeTest(t, c, xMax, yMax));
+                if (c.lanes) child[nc++] = c;
             }
+            while (nc) stack[sp++] = child[--nc];
         }
     }
 
