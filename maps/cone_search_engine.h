@@ -523,23 +523,17 @@ class Engine {
             thr = ok ? Max(thr, t.thr[k]) : thr;
             meets |= ok;
         }
-        const uint32_t lanes =
-            Bits(meets & BoundLanes(t, X0, X1, Y0, Y1, m, thr)) & n.lanes;
-        if (lanes && n.lx == 0 && n.ly == 0) {
-            // One texel (of depth m, the rip-map's level (0, 0)): the test above is
-            // TexelLanes' for it (its exact offset, and per lane the sectors that hold
-            // the offset, with the largest of their thresholds, which passes the lanes
-            // that one of them passes).
-            const int X = A0 + a * B0, Y = B0 + bt * A0;
-            for (uint32_t pass = lanes; pass; pass &= pass - 1)
-                Exact(t, std::countr_zero(pass), X, Y, m);
-            return 0;
-        }
-        if (lanes && n.lx + n.ly <= kRipLeaf) {
-            RipLeaf(t, rip, cfg, f, n.lx, A0, A1, B0, B1, o1, o2, lanes);
-            return 0;
-        }
-        return lanes;
+        return Bits(meets & BoundLanes(t, X0, X1, Y0, Y1, m, thr)) & n.lanes;
+    }
+
+    /// A cell of at most kLanes texels that passed RipTest for `n.lanes`: RipLeaf.
+    RS_INLINE void RipLeafOf(Tile& t, const ConeSearchData::RipMap& rip,
+                             const RipLayout& cfg, const RipFrame& f, const RipNode& n) {
+        const int W = d_.W, H = d_.H;
+        const int o1 = n.t1 * W, o2 = n.t2 * H;
+        const int A0 = o1 + (n.cx << n.lx), A1 = o1 + std::min((n.cx + 1) << n.lx, W) - 1;
+        const int B0 = o2 + (n.cy << n.ly), B1 = o2 + std::min((n.cy + 1) << n.ly, H) - 1;
+        RipLeaf(t, rip, cfg, f, n.lx, A0, A1, B0, B1, o1, o2, n.lanes);
     }
 
     /// Every texel of a small rip cell [A0, A1] x [B0, B1] (sheared, in the image at
@@ -658,7 +652,11 @@ class Engine {
                           0,
                           0};
                 r.lanes = uint16_t(RipTest(t, rip, cfg, f, r));
-                if (r.lanes) stack[sp++] = r;
+                if (!r.lanes) continue;
+                if (r.lx + r.ly <= kRipLeaf)
+                    RipLeafOf(t, rip, cfg, f, r);
+                else
+                    stack[sp++] = r;
             }
         RipNode n;
         bool have = false;
@@ -694,6 +692,12 @@ class Engine {
             if (!has1) c1.lanes = 0;
             nearC.lanes = nearC.lanes ? uint16_t(RipTest(t, rip, cfg, f, nearC)) : 0;
             farC.lanes = farC.lanes ? uint16_t(RipTest(t, rip, cfg, f, farC)) : 0;
+            if (nearC.lx + nearC.ly <= kRipLeaf) {  // both halves are leaves
+                if (nearC.lanes) RipLeafOf(t, rip, cfg, f, nearC);
+                if (farC.lanes) RipLeafOf(t, rip, cfg, f, farC);
+                have = false;
+                continue;
+            }
             if (farC.lanes) stack[sp++] = farC;
             have = nearC.lanes != 0;
             if (have) n = nearC;
