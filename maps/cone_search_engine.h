@@ -739,7 +739,10 @@ class Engine {
     static constexpr int kLeafLevel = 1;
     /// Rip cells of at most kLanes = 2^kRipLeaf texels are tested whole (RipLeaf).
     static constexpr int kRipLeaf = std::countr_zero(unsigned(kLanes));
-    static constexpr int kStack = 160;  ///< 9 roots + 3 per level below (top <= 14)
+    /// Roots (9, or 15 for a sheared rip-map), then at most 3 more per quadtree level or
+    /// 1 per rip-map split; levels < 32.
+    static constexpr int kStack = 160;
+    static_assert(kStack >= 15 + 2 * 31 && kStack >= 9 + 3 * 31 + 1);
 
     const ConeSearchData& d_;
     const Geometry& g_;
