@@ -73,15 +73,15 @@ RS_INLINE VF ToFloat(const VI& v) { return __builtin_convertvector(v, VF); }
 /// lane's best: thresholds are float(best) * (1 + 2^-16), far above the float rounding
 /// of the test (a few 2^-24); depth differences below kTiny (whose squares could lose
 /// precision) always pass. docs/cone_maps.md, "The lane search".
+constexpr float kThresholdScale = 1.0f + 0x1p-16f;
+constexpr float kTiny = 0x1p-40f;
+
 /// 0, 1, ..., kLanes - 1.
 const VI kIota = [] {
     VI v{};
     for (int k = 0; k < kLanes; ++k) v[k] = k;
     return v;
 }();
-
-constexpr float kThresholdScale = 1.0f + 0x1p-16f;
-constexpr float kTiny = 0x1p-40f;
 
 struct Node {
     int8_t level, tx, ty;  ///< pyramid level; wrap image (-1, 0, 1) in x and y
@@ -241,24 +241,18 @@ class Engine {
     /// The exact candidate of the texel at unwrapped (X, Y) for lane k.
     void Exact(Tile& t, int k, int X, int Y, float b) {
         const int dx = X - t.pi[k], dy = Y - t.pj[k];
-        const float a = t.a[k];
-        if (!(b < a) || dx < -g_.halfX || dx > g_.halfX || dy < -g_.halfY ||
-            dy > g_.halfY || (dx == 0 && dy == 0))
-            return;
         if (d_.limiting) {
             int sx, sy;
             OffsetClass(dx, dy, sx, sy);
             if (!(FlagsAt(X, Y) >> ClassBit(sx, sy) & 1u)) return;
         }
-        const double q = CandidateQ(g_.S(dx, dy), a, b);
-        const unsigned mask =
-            d_.sectors == ConeKind::Cone ? 1u : SectorMask(d_.sectors, g_, dx, dy);
-        Update(t, k, X, Y, q, mask);
+        ExactIn(t, k, X, Y, b,
+                d_.sectors == ConeKind::Cone ? 1u : SectorMask(d_.sectors, g_, dx, dy));
     }
 
-    /// Exact for a texel whose sectors among the pass's channels are known: `mask`,
-    /// the rip-map's quadrants of its (c1, c2) offset (the closed sectors themselves;
-    /// the other passes' sectors are not needed).
+    /// Exact for a texel whose sectors are known: `mask` (the rip-map's leaves pass the
+    /// quadrants of its (c1, c2) offset, which are the closed sectors themselves; the
+    /// other passes' sectors are not needed).
     void ExactIn(Tile& t, int k, int X, int Y, float b, unsigned mask) {
         const int dx = X - t.pi[k], dy = Y - t.pj[k];
         const float a = t.a[k];
@@ -468,6 +462,23 @@ class Engine {
         (std::make_integer_sequence<int, kNumRipLayouts>{});
     }
 
+    /// A rip cell's ranges of sheared coordinates [A0, A1] x [B0, B1] (clipped at the
+    /// edge), in the wrap image at (o1, o2).
+    struct RipBox {
+        int o1, o2, A0, A1, B0, B1;
+    };
+    RS_INLINE RipBox BoxOf(const RipNode& n) const {
+        const int W = d_.W, H = d_.H;
+        RipBox r;
+        r.o1 = n.t1 * W;
+        r.o2 = n.t2 * H;
+        r.A0 = r.o1 + (n.cx << n.lx);
+        r.A1 = r.o1 + std::min((n.cx + 1) << n.lx, W) - 1;
+        r.B0 = r.o2 + (n.cy << n.ly);
+        r.B1 = r.o2 + std::min((n.cy + 1) << n.ly, H) - 1;
+        return r;
+    }
+
     /// A tile's coordinates in a rip-map's sheared frame.
     struct RipFrame {
         int p1min, p1max, p2min, p2max;  ///< the valid lanes' range in (c1, c2)
@@ -475,18 +486,13 @@ class Engine {
     };
 
     /// The lanes of `n.lanes` for which rip cell n can hold a blocker below the minimum
-    /// of a sector it meets from that lane's apex; a single texel that passes is
-    /// evaluated exactly here (and 0 returned: nothing is left to open).
+    /// of a sector it meets from that lane's apex.
     RS_INLINE uint32_t RipTest(Tile& t, const ConeSearchData::RipMap& rip,
                                const RipLayout& cfg, const RipFrame& f,
                                const RipNode& n) {
-        const int W = d_.W, H = d_.H;
         const int a = cfg.alpha, bt = cfg.beta;
-        const int o1 = n.t1 * W, o2 = n.t2 * H;
-        const int A0 = o1 + (n.cx << n.lx),
-                  A1 = o1 + std::min((n.cx + 1) << n.lx, W) - 1;  // c1 range
-        const int B0 = o2 + (n.cy << n.ly),
-                  B1 = o2 + std::min((n.cy + 1) << n.ly, H) - 1;  // c2 range
+        const RipBox box = BoxOf(n);
+        const int A0 = box.A0, A1 = box.A1, B0 = box.B0, B1 = box.B1;
         // Sectors the cell can hold for some lane: quadrants of (c1, c2) offsets.
         const int lo1 = A0 - f.p1max, hi1 = A1 - f.p1min, lo2 = B0 - f.p2max,
                   hi2 = B1 - f.p2min;
@@ -526,38 +532,28 @@ class Engine {
         return Bits(meets & BoundLanes(t, X0, X1, Y0, Y1, m, thr)) & n.lanes;
     }
 
-    /// A cell of at most kLanes texels that passed RipTest for `n.lanes`: RipLeaf.
-    RS_INLINE void RipLeafOf(Tile& t, const ConeSearchData::RipMap& rip,
-                             const RipLayout& cfg, const RipFrame& f, const RipNode& n) {
-        const int W = d_.W, H = d_.H;
-        const int o1 = n.t1 * W, o2 = n.t2 * H;
-        const int A0 = o1 + (n.cx << n.lx), A1 = o1 + std::min((n.cx + 1) << n.lx, W) - 1;
-        const int B0 = o2 + (n.cy << n.ly), B1 = o2 + std::min((n.cy + 1) << n.ly, H) - 1;
-        RipLeaf(t, rip, cfg, f, n.lx, A0, A1, B0, B1, o1, o2, n.lanes);
-    }
-
-    /// Every texel of a small rip cell [A0, A1] x [B0, B1] (sheared, in the image at
-    /// (o1, o2); at most kLanes texels) for the lanes `lanes`: the cell's texels are the
-    /// vector's elements, and each lane in turn tests them all (its offsets, the sector
-    /// of each of the pass's channels (a quadrant of (c1, c2) offsets), the float test);
-    /// the texels that pass are evaluated exactly.
+    /// Every texel of a small rip cell n (at most kLanes texels) that passed RipTest, for
+    /// its lanes: the cell's texels are the vector's elements, and each lane in turn
+    /// tests them all (its offsets, the sector of each of the pass's channels (a quadrant
+    /// of (c1, c2) offsets), the float test); the texels that pass are evaluated exactly.
     RS_INLINE void RipLeaf(Tile& t, const ConeSearchData::RipMap& rip,
-                           const RipLayout& cfg, const RipFrame& f, int lx, int A0,
-                           int A1, int B0, int B1, int o1, int o2, uint32_t lanes) {
+                           const RipLayout& cfg, const RipFrame& f, const RipNode& n) {
+        const RipBox box = BoxOf(n);
+        const int lx = n.lx, A0 = box.A0, B0 = box.B0;
         // Element v is texel (A0 + v % 2^lx, B0 + v / 2^lx) of the cell (clipped:
         // elements outside it have depth +inf, never a blocker).
-        const int w = A1 - A0 + 1, h = B1 - B0 + 1;
+        const int w = box.A1 - A0 + 1, h = box.B1 - B0 + 1;
         alignas(64) float depth[kLanes];
         for (int v = 0; v < kLanes; ++v) depth[v] = INFINITY;
         const float* row =
-            rip.mins.data() + size_t(B0 - o2) * size_t(d_.W) + size_t(A0 - o1);
+            rip.mins.data() + size_t(B0 - box.o2) * size_t(d_.W) + size_t(A0 - box.o1);
         for (int j = 0; j < h; ++j, row += d_.W)
             for (int i = 0; i < w; ++i) depth[(j << lx) + i] = row[i];
         VF b;
         __builtin_memcpy(&b, depth, sizeof(b));
         const VI c1 = A0 + (kIota & ((1 << lx) - 1)), c2 = B0 + (kIota >> lx);
         const VI X = c1 + cfg.alpha * c2, Y = c2 + cfg.beta * c1;
-        for (; lanes; lanes &= lanes - 1) {
+        for (uint32_t lanes = n.lanes; lanes; lanes &= lanes - 1) {
             const int k = std::countr_zero(lanes);
             const float ak = t.a[k];
             const VI dx = X - t.pi[k], dy = Y - t.pj[k];
@@ -654,7 +650,7 @@ class Engine {
                 r.lanes = uint16_t(RipTest(t, rip, cfg, f, r));
                 if (!r.lanes) continue;
                 if (r.lx + r.ly <= kRipLeaf)
-                    RipLeafOf(t, rip, cfg, f, r);
+                    RipLeaf(t, rip, cfg, f, r);
                 else
                     stack[sp++] = r;
             }
@@ -693,8 +689,8 @@ class Engine {
             nearC.lanes = nearC.lanes ? uint16_t(RipTest(t, rip, cfg, f, nearC)) : 0;
             farC.lanes = farC.lanes ? uint16_t(RipTest(t, rip, cfg, f, farC)) : 0;
             if (nearC.lx + nearC.ly <= kRipLeaf) {  // both halves are leaves
-                if (nearC.lanes) RipLeafOf(t, rip, cfg, f, nearC);
-                if (farC.lanes) RipLeafOf(t, rip, cfg, f, farC);
+                if (nearC.lanes) RipLeaf(t, rip, cfg, f, nearC);
+                if (farC.lanes) RipLeaf(t, rip, cfg, f, farC);
                 have = false;
                 continue;
             }
