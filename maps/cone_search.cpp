@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <initializer_list>
 #include <limits>
+#include <memory>
 #include <string_view>
 
 #include "core/error.h"
@@ -82,8 +83,13 @@ void BuildMinPyramid(const ConeSearchData& d, const float* base, float* out) {
 
 /// The rip-map of `rip`'s sheared image: level (0, 0) holds the depth of real texel
 /// (c1 + alpha c2, c2 + beta c1) (wrapped) at (c1, c2); level (lx, ly) the minimum over
-/// aligned 2^lx x 2^ly rectangles of it (clipped at the edge).
-void BuildRipMap(const ConeSearchData& d, ConeSearchData::RipMap& rip) {
+/// aligned 2^lx x 2^ly rectangles of it (clipped at the edge). Its cells go to `cells`,
+/// allocated by the first pass and reused by the next (every rip-map of a map has the
+/// same size). The buffer is left uninitialised, so that its pages are first touched by
+/// the parallel fill below and not by one thread zeroing 4 W H floats (on this host's VM,
+/// page faults were most of the first passes' build time).
+void BuildRipMap(const ConeSearchData& d, ConeSearchData::RipMap& rip,
+                 std::unique_ptr<float[]>& cells, size_t& cellsSize) {
     const int W = d.W, H = d.H;
     auto levels = [](int n) {
         int l = 0;
@@ -105,44 +111,60 @@ void BuildRipMap(const ConeSearchData& d, ConeSearchData::RipMap& rip) {
             rip.offset[size_t(lx) * size_t(rip.levelsY + 1) + size_t(ly)] = off;
             off += size_t(rip.cellsX[size_t(lx)]) * size_t(rip.cellsY[size_t(ly)]);
         }
-    rip.mins.resize(off);
+    if (cellsSize != off) {
+        cells.reset(new float[off]);
+        cellsSize = off;
+    }
+    float* mins = cells.get();
+    rip.mins = mins;
     const DepthField& hf = *d.field;
     const int a = rip.Layout().alpha, b = rip.Layout().beta;
     tbb::parallel_for(tbb::blocked_range<int>(0, H, 64),
                       [&](const tbb::blocked_range<int>& r) {
                           for (int c2 = r.begin(); c2 < r.end(); ++c2)
                               for (int c1 = 0; c1 < W; ++c1)
-                                  rip.mins[size_t(c2) * size_t(W) + size_t(c1)] =
+                                  mins[size_t(c2) * size_t(W) + size_t(c1)] =
                                       hf.At(Wrap(c1 + a * c2, W), Wrap(c2 + b * c1, H));
                       });
     auto level = [&](int lx, int ly) {
-        return rip.mins.data() +
-               rip.offset[size_t(lx) * size_t(rip.levelsY + 1) + size_t(ly)];
+        return mins + rip.offset[size_t(lx) * size_t(rip.levelsY + 1) + size_t(ly)];
     };
     for (int lx = 0; lx <= rip.levelsX; ++lx)
         for (int ly = 0; ly <= rip.levelsY; ++ly) {
             if (lx == 0 && ly == 0) continue;
             const int w = rip.cellsX[size_t(lx)], h = rip.cellsY[size_t(ly)];
             float* dst = level(lx, ly);
+            // Rows in parallel where a level is large (at least 2^16 cells).
+            const int grain = std::max(1, (1 << 16) / w);
             if (ly > 0) {  // from (lx, ly - 1): pairs of rows
                 const float* src = level(lx, ly - 1);
                 const int ph = rip.cellsY[size_t(ly - 1)];
-                for (int j = 0; j < h; ++j) {
-                    const float* r0 = src + size_t(2 * j) * size_t(w);
-                    const float* r1 = 2 * j + 1 < ph ? r0 + w : r0;
-                    for (int i = 0; i < w; ++i)
-                        dst[size_t(j) * size_t(w) + size_t(i)] = std::min(r0[i], r1[i]);
-                }
+                tbb::parallel_for(tbb::blocked_range<int>(0, h, grain),
+                                  [&](const tbb::blocked_range<int>& r) {
+                                      for (int j = r.begin(); j < r.end(); ++j) {
+                                          const float* r0 =
+                                              src + size_t(2 * j) * size_t(w);
+                                          const float* r1 = 2 * j + 1 < ph ? r0 + w : r0;
+                                          for (int i = 0; i < w; ++i)
+                                              dst[size_t(j) * size_t(w) + size_t(i)] =
+                                                  std::min(r0[i], r1[i]);
+                                      }
+                                  });
             } else {  // from (lx - 1, 0): pairs of columns
                 const float* src = level(lx - 1, 0);
                 const int pw = rip.cellsX[size_t(lx - 1)];
-                for (int j = 0; j < h; ++j)
-                    for (int i = 0; i < w; ++i) {
-                        const float* row = src + size_t(j) * size_t(pw);
-                        const int i1 = 2 * i + 1 < pw ? 2 * i + 1 : 2 * i;
-                        dst[size_t(j) * size_t(w) + size_t(i)] =
-                            std::min(row[2 * i], row[i1]);
-                    }
+                tbb::parallel_for(tbb::blocked_range<int>(0, h, grain),
+                                  [&](const tbb::blocked_range<int>& r) {
+                                      for (int j = r.begin(); j < r.end(); ++j) {
+                                          const float* row = src + size_t(j) * size_t(pw);
+                                          for (int i = 0; i < w; ++i) {
+                                              const int i1 =
+                                                  2 * i + 1 < pw ? 2 * i + 1 : 2 * i;
+                                              dst[size_t(j) * size_t(w) + size_t(i)] =
+                                                  std::min(row[2 * i], row[i1]);
+                                          }
+                                      }
+                                  });
             }
         }
 }
@@ -217,7 +239,12 @@ void RunConeSearch(const ConeSearchJob& job, ProgressCounter* progress) {
     d.top = l;
     d.pyramidSize = off;
     const size_t n = size_t(d.W) * size_t(d.H);
-    if (!d.limiting) {
+    d.rips = RipMapLayout(d.sectors, d.W, d.H);
+    if (!d.rips.empty()) {
+        // The rip-maps serve the traversal: no pyramid, only the least depth.
+        RS_CHECK(!d.limiting);
+        d.dmin = *std::min_element(hf.depth.begin(), hf.depth.end());
+    } else if (!d.limiting) {
         d.pyramids.resize(off);
         BuildMinPyramid(d, hf.depth.data(), d.pyramids.data());
         d.dmin = d.pyramids[off - 1];
@@ -252,25 +279,27 @@ void RunConeSearch(const ConeSearchJob& job, ProgressCounter* progress) {
         }
         d.dmin = dmin;
     }
-    d.rips = RipMapLayout(d.sectors, d.W, d.H);
     const int tileRows = (d.H + kLaneTile - 1) / kLaneTile;
     // Bands of two tile rows: the seeds carry from row to row inside a band.
     constexpr int kBand = 2;
     const BandFn fn = Isa().fn;
     // One pass per rip-map (its channels only), so that one rip-map is read at a time.
     const int passes = ConeSearchPasses(job.sectors, d.W, d.H);
-    // Only the pass's rip-map is held (4 W H floats): built before it, freed after.
+    // Only the pass's rip-map is held (4 W H floats): each pass builds its own into the
+    // same buffer.
+    std::unique_ptr<float[]> ripCells;
+    size_t ripCellsSize = 0;
     for (int pass = 0; pass < passes; ++pass) {
         d.ripPass = pass;
         d.passChannels = d.rips.empty() ? (1u << d.nChannels) - 1u
                                         : d.rips[size_t(pass)].Layout().Channels();
-        if (!d.rips.empty()) BuildRipMap(d, d.rips[size_t(pass)]);
+        if (!d.rips.empty()) BuildRipMap(d, d.rips[size_t(pass)], ripCells, ripCellsSize);
         tbb::parallel_for(tbb::blocked_range<int>(0, (tileRows + kBand - 1) / kBand, 1),
                           [&](const tbb::blocked_range<int>& r) {
                               for (int b = r.begin(); b < r.end(); ++b)
                                   fn(d, b * kBand, std::min(tileRows, b * kBand + kBand));
                           });
-        if (!d.rips.empty()) std::vector<float>().swap(d.rips[size_t(pass)].mins);
+        if (!d.rips.empty()) d.rips[size_t(pass)].mins = nullptr;
     }
 }
 

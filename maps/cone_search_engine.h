@@ -546,7 +546,7 @@ class Engine {
         alignas(64) float depth[kLanes];
         for (int v = 0; v < kLanes; ++v) depth[v] = INFINITY;
         const float* row =
-            rip.mins.data() + size_t(B0 - box.o2) * size_t(d_.W) + size_t(A0 - box.o1);
+            rip.mins + size_t(B0 - box.o2) * size_t(d_.W) + size_t(A0 - box.o1);
         for (int j = 0; j < h; ++j, row += d_.W)
             for (int i = 0; i < w; ++i) depth[(j << lx) + i] = row[i];
         VF b;

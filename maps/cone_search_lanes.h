@@ -68,7 +68,8 @@ struct ConeSearchData {
         int levelsX = 0, levelsY = 0;
         std::vector<int> cellsX, cellsY;  ///< per level
         std::vector<size_t> offset;       ///< per (lx, ly): lx * (levelsY + 1) + ly
-        std::vector<float> mins;
+        /// The cells, level after level (RunConeSearch's buffer, shared by the passes).
+        const float* mins = nullptr;
         float At(int lx, int ly, int cx, int cy) const {
             return mins[offset[size_t(lx) * size_t(levelsY + 1) + size_t(ly)] +
                         size_t(cy) * size_t(cellsX[size_t(lx)]) + size_t(cx)];
