@@ -34,8 +34,11 @@ void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc,
     // The image writers stage the file (in `outputs`, or on their own), so a failure
     // leaves nothing behind.
     if (ext == ".exr") {
-        const ConeMap q = QuantizeConeMap(m, enc);
-        WriteFloatImage(path, m.width, m.height, m.channels, q.values.data(),
+        // Float maps are written as they are (QuantizeConeMap would only copy them).
+        ConeMap q;
+        if (enc != ConeEncoding::Float) q = QuantizeConeMap(m, enc);
+        const ConeMap& stored = enc == ConeEncoding::Float ? m : q;
+        WriteFloatImage(path, m.width, m.height, m.channels, stored.values.data(),
                         ChannelNames(m.kind), outputs);
         return;
     }
