@@ -338,11 +338,10 @@ void Run(const MapsOptions& o) {
         m = generate();
     }
     if (o.safety) m = BilinearSafetyPass(m);
-    // The map as stored; a float map is stored as it is, without a copy (for acm8 at
-    // 1024², 32 MB of fresh pages, which this host's VM takes ~0.2 s to fault in).
-    ConeMap quantized;
-    if (enc != ConeEncoding::Float) quantized = QuantizeConeMap(m, enc);
-    const ConeMap& stored = enc == ConeEncoding::Float ? m : quantized;
+    // The map as stored, quantised once for the statistics and the writer (a float map
+    // is not copied: fresh pages cost this host's VM 3-7 ms per MB, docs/cone_maps.md).
+    ConeMap scratch;
+    const ConeMap& stored = StoredConeMap(m, enc, scratch);
     StatusDone();
     const ConeMapStats s = ComputeConeMapStats(stored, o.bins);
     PrintStats(stored, s);
@@ -352,7 +351,7 @@ void Run(const MapsOptions& o) {
         OutputSet outputs("--out \"" + o.out + "\"");
         outputs.Add(o.out);
         outputs.Add(StatsPath(o.out));  // both destinations checked before any writing
-        WriteConeMap(o.out, m, enc, &outputs);
+        WriteConeMap(o.out, m, enc, &outputs, &stored);
         nlohmann::json stats = nlohmann::json::parse(ConeMapStatsJson(stored, s, enc));
         stats["cone_bounds"] = std::string(kConeBoundsNames.Name(o.bounds));
         outputs.Write(StatsPath(o.out), stats.dump(2) + "\n");

@@ -147,6 +147,15 @@ Inspection Inspect(const std::string& subject, const std::string& path,
         dir = up.empty() ? fs::path(".") : up;
     }
     r.existingDir = dir;
+    // A folder the process may not write to (permissions, a read-only mount) is found
+    // here, before a run's work, not when its outputs are staged.
+    if (::faccessat(AT_FDCWD, dir.c_str(), W_OK | X_OK, AT_EACCESS) != 0) {
+        const int e = errno;
+        if (e == EACCES || e == EPERM || e == EROFS)
+            Fail(subject, path,
+                 "cannot create a file in folder " + Quote(dir.string()) + " (" +
+                     ErrnoText(e) + "); nothing was written");
+    }
     // Every name that is still to be created must fit the file system's limit, checked
     // before anything exists (ENAMETOOLONG would otherwise strike halfway).
     const size_t nameMax = NameMax(dir);

@@ -442,6 +442,12 @@ ConeMap QuantizeConeMap(const ConeMap& m, ConeEncoding enc,
     return out;
 }
 
+const ConeMap& StoredConeMap(const ConeMap& m, ConeEncoding enc, ConeMap& scratch) {
+    if (enc == ConeEncoding::Float) return m;
+    scratch = QuantizeConeMap(m, enc);
+    return scratch;
+}
+
 ConeMap BilinearSafetyPass(const ConeMap& m) {
     ConeMap out = m;
     const int W = m.width, H = m.height, C = m.channels;

@@ -182,6 +182,10 @@ void GenerateAdaptiveSectorMap(const DepthField& hf, ConeKind kind, float thresh
 /// unchanged.
 ConeMap QuantizeConeMap(const ConeMap& m, ConeEncoding enc,
                         std::vector<uint16_t>* codes = nullptr);
+/// The map as `enc` stores it (the ratios a kernel sees, as QuantizeConeMap gives them):
+/// `m` itself for float, without a copy (a float acm8 map at 1024² is 32 MB), else the
+/// quantised map, built in `scratch`. The result refers to `m` or to `scratch`.
+const ConeMap& StoredConeMap(const ConeMap& m, ConeEncoding enc, ConeMap& scratch);
 /// Decodes one code of enc to the ratio the GPU sees (unorm conversion, float
 /// arithmetic).
 float DecodeRatio(uint16_t code, ConeEncoding enc);
@@ -210,9 +214,11 @@ std::string ConeMapStatsJson(const ConeMap& m, const ConeMapStats& s, ConeEncodi
 /// 8-bit (channels 1..4; Acm8 as two 4-channel halves side by side, as 000 §II-D).
 /// Atomic: written to a temporary beside `path` and renamed (core/output_set.h); with
 /// `outputs`, staged in that set until the caller commits it (a map and its statistics
-/// together). Throws Error.
+/// together). `stored`, when given, must be StoredConeMap(m, enc): a caller that has it
+/// already saves quantising again for ".exr" (".png" takes its codes from `m`). Throws
+/// Error.
 void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc,
-                  OutputSet* outputs = nullptr);
+                  OutputSet* outputs = nullptr, const ConeMap* stored = nullptr);
 
 /// Loads a cone map made elsewhere (e.g. GPU Gems 3 "*_cone.tga": ratio linear in B, 8
 /// bit). channel: 0..3 = R,G,B,A; -1 = all four (Quad: R,G,B,A = +x,-x,+y,-y). Acm8 reads

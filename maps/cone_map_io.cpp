@@ -26,7 +26,7 @@ std::string Lower(std::string s) {
 }  // namespace
 
 void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc,
-                  OutputSet* outputs) {
+                  OutputSet* outputs, const ConeMap* stored) {
     const std::string ext = Lower(std::filesystem::path(path).extension().string());
     if (ext != ".exr" && ext != ".png")
         throw Error(ParamName("out") + " \"" + path +
@@ -34,11 +34,10 @@ void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc,
     // The image writers stage the file (in `outputs`, or on their own), so a failure
     // leaves nothing behind.
     if (ext == ".exr") {
-        // Float maps are written as they are (QuantizeConeMap would only copy them).
-        ConeMap q;
-        if (enc != ConeEncoding::Float) q = QuantizeConeMap(m, enc);
-        const ConeMap& stored = enc == ConeEncoding::Float ? m : q;
-        WriteFloatImage(path, m.width, m.height, m.channels, stored.values.data(),
+        ConeMap scratch;
+        const ConeMap& values = stored ? *stored : StoredConeMap(m, enc, scratch);
+        RS_CHECK(values.values.size() == m.values.size());
+        WriteFloatImage(path, m.width, m.height, m.channels, values.values.data(),
                         ChannelNames(m.kind), outputs);
         return;
     }

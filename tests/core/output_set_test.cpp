@@ -247,3 +247,38 @@ TEST(OutputSet, EmptyOrFolderNamesAreRefused) {
     EXPECT_THROW(set.Add(""), Error);
     EXPECT_THROW(set.Add("a/.."), Error);
 }
+
+TEST(OutputSet, FolderWithoutWritePermissionIsRefusedByTheCheck) {
+    const fs::path d = Scratch();
+    fs::create_directories(d / "ro");
+    fs::create_directories(d / "rw");
+    ::chmod(d.c_str(), 0755);
+    ::chmod((d / "ro").c_str(), 0555);
+    ::chmod((d / "rw").c_str(), 0777);
+    const auto before = Snapshot(d);
+    // Root may write anywhere, so the checks run in a child as an unprivileged user. The
+    // child's exit code: 3 = the error named the folder, 4 = another error, 0 = passed.
+    const auto check = [&](const fs::path& out) {
+        if (::geteuid() == 0 && (::setgid(65534) != 0 || ::setuid(65534) != 0))
+            std::_Exit(2);
+        try {
+            CheckOutputDestination(out.string(), "--out");
+        } catch (const Error& e) {
+            std::fprintf(stderr, "%s\n", e.what());
+            const std::string msg = e.what();
+            std::_Exit(msg.find("cannot create a file in folder \"" +
+                                (d / "ro").string() + "\"") != std::string::npos
+                           ? 3
+                           : 4);
+        }
+        std::_Exit(0);
+    };
+    EXPECT_EXIT(check(d / "ro" / "a.exr"), ::testing::ExitedWithCode(3),
+                "nothing was written");
+    // A missing folder that would be created inside it: the same folder is named.
+    EXPECT_EXIT(check(d / "ro" / "sub" / "a.exr"), ::testing::ExitedWithCode(3), "");
+    // A folder it may write to passes.
+    EXPECT_EXIT(check(d / "rw" / "a.exr"), ::testing::ExitedWithCode(0), "");
+    EXPECT_EQ(Snapshot(d), before);
+    ::chmod((d / "ro").c_str(), 0755);
+}

@@ -621,6 +621,52 @@ TEST(ConeMap, WriteIsAtomicAndRejectsBadExtension) {
     std::filesystem::remove_all(dir);
 }
 
+TEST(ConeMap, StoredMapIsTheFloatMapItselfOrItsQuantisation) {
+    const ConeMap m = GenerateConeMap(MakeBuiltinMap("shapes", 16, 16), ConeKind::Quad);
+    ConeMap scratch;
+    const ConeMap& f = StoredConeMap(m, ConeEncoding::Float, scratch);
+    EXPECT_EQ(&f, &m);  // no copy
+    EXPECT_TRUE(scratch.values.empty());
+    for (const ConeEncoding e :
+         {ConeEncoding::U8, ConeEncoding::U8Sqrt, ConeEncoding::U16}) {
+        const ConeMap& q = StoredConeMap(m, e, scratch);
+        EXPECT_EQ(&q, &scratch);
+        ASSERT_EQ(q.values.size(), m.values.size());
+        size_t lowered = 0;
+        for (size_t i = 0; i < m.values.size(); ++i) {
+            // Each value is the decoding of its own code, never above the exact ratio.
+            EXPECT_EQ(q.values[i], DecodeRatio(EncodeRatio(m.values[i], e), e));
+            EXPECT_LE(q.values[i], m.values[i]);
+            lowered += q.values[i] < m.values[i];
+        }
+        EXPECT_GT(lowered, 0u);  // quantisation took place
+    }
+}
+
+TEST(ConeMap, WriterGivenTheStoredMapWritesTheSameFile) {
+    const auto dir = std::filesystem::temp_directory_path() /
+                     ("rs_cone_stored_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    const ConeMap m = GenerateConeMap(MakeBuiltinMap("shapes", 16, 16), ConeKind::Acm8);
+    const auto bytes = [](const std::filesystem::path& p) {
+        std::ifstream in(p, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    for (const ConeEncoding e : {ConeEncoding::Float, ConeEncoding::U8}) {
+        ConeMap scratch;
+        const ConeMap& stored = StoredConeMap(m, e, scratch);
+        WriteConeMap((dir / "a.exr").string(), m, e);
+        WriteConeMap((dir / "b.exr").string(), m, e, nullptr, &stored);
+        const std::string a = bytes(dir / "a.exr");
+        EXPECT_FALSE(a.empty());
+        EXPECT_EQ(a, bytes(dir / "b.exr")) << ToString(e);
+    }
+    // The u8 file holds the quantised ratios, not the float ones.
+    WriteConeMap((dir / "f.exr").string(), m, ConeEncoding::Float);
+    EXPECT_NE(bytes(dir / "a.exr"), bytes(dir / "f.exr"));
+    std::filesystem::remove_all(dir);
+}
+
 TEST(ConeMap, ExternalGpuGemsMapLoadsAndChecksSize) {
 #ifndef RS_SHARED_DATA
     GTEST_SKIP() << "RS_SHARED_DATA not defined";
