@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdlib>
 #include <initializer_list>
 #include <limits>
@@ -77,6 +78,124 @@ void BuildMinPyramid(const ConeSearchData& d, const float* base, float* out) {
                             std::min(r0[2 * i], r0[i1]), std::min(r1[2 * i], r1[i1]));
                     }
                 }
+            });
+    }
+}
+
+/// `v` rounded to a float at most `v`.
+float FloatBelow(double v) {
+    float r = float(v);
+    if (double(r) > v) r = std::nextafter(r, -std::numeric_limits<float>::infinity());
+    return r;
+}
+
+/// The lower planes of the quadtree's cells (ConeSearchData::LowerPlane), levels 1..top,
+/// each from its children's (level 0: the texels, flat). The slope is the children's
+/// finite difference across the cell where both columns (rows) of children exist, else
+/// their mean slope; the height at the centre is the mean of the children's planes there,
+/// lowered until the plane lies under each child's plane at the child's corners, hence
+/// under every texel (any plane is valid: the lowering makes it so). In double; q0 is
+/// rounded down to a float against the float slopes, with a guard far above double
+/// rounding.
+void BuildLowerPlanes(ConeSearchData& d, const float* depth) {
+    using LowerPlane = ConeSearchData::LowerPlane;
+    if (d.top < 1) return;
+    const int W = d.W, H = d.H;
+    d.planes.resize(d.pyramidSize - d.levelOff[1]);
+    for (int l = 1; l <= d.top; ++l) {
+        const int w = d.levelW[size_t(l)], h = d.levelH[size_t(l)];
+        const int pw = d.levelW[size_t(l - 1)], ph = d.levelH[size_t(l - 1)];
+        LowerPlane* dst = d.planes.data() + (d.levelOff[size_t(l)] - d.levelOff[1]);
+        const LowerPlane* src =
+            l >= 2 ? d.planes.data() + (d.levelOff[size_t(l - 1)] - d.levelOff[1])
+                   : nullptr;
+        // The texel box of cell c at level k along an axis of n texels.
+        const auto lo = [](int c, int k) { return double(c << k); };
+        const auto hi = [](int c, int k, int n) {
+            return double(std::min((c + 1) << k, n) - 1);
+        };
+        tbb::parallel_for(
+            tbb::blocked_range<int>(0, h, 16), [&](const tbb::blocked_range<int>& r) {
+                for (int j = r.begin(); j < r.end(); ++j)
+                    for (int i = 0; i < w; ++i) {
+                        const double cx = 0.5 * (lo(i, l) + hi(i, l, W)),
+                                     cy = 0.5 * (lo(j, l) + hi(j, l, H));
+                        struct Child {
+                            double q0, gx, gy, cx, cy, x0, x1, y0, y1;
+                            bool in;
+                        } ch[2][2];
+                        for (int b = 0; b < 2; ++b)
+                            for (int a = 0; a < 2; ++a) {
+                                Child& c = ch[b][a];
+                                const int ci = 2 * i + a, cj = 2 * j + b;
+                                c.in = ci < pw && cj < ph;
+                                if (!c.in) continue;
+                                c.x0 = lo(ci, l - 1);
+                                c.x1 = hi(ci, l - 1, W);
+                                c.y0 = lo(cj, l - 1);
+                                c.y1 = hi(cj, l - 1, H);
+                                c.cx = 0.5 * (c.x0 + c.x1);
+                                c.cy = 0.5 * (c.y0 + c.y1);
+                                if (src) {
+                                    const LowerPlane& p =
+                                        src[size_t(cj) * size_t(pw) + size_t(ci)];
+                                    c.q0 = p.q0;
+                                    c.gx = p.gx;
+                                    c.gy = p.gy;
+                                } else {
+                                    c.q0 = depth[size_t(cj) * size_t(W) + size_t(ci)];
+                                    c.gx = c.gy = 0;
+                                }
+                            }
+                        // Slopes.
+                        double gx = 0, gy = 0, sgx = 0, sgy = 0;
+                        int nx = 0, ny = 0, n = 0;
+                        for (int b = 0; b < 2; ++b)
+                            if (ch[b][0].in && ch[b][1].in) {
+                                gx += (ch[b][1].q0 - ch[b][0].q0) /
+                                      (ch[b][1].cx - ch[b][0].cx);
+                                ++nx;
+                            }
+                        for (int a = 0; a < 2; ++a)
+                            if (ch[0][a].in && ch[1][a].in) {
+                                gy += (ch[1][a].q0 - ch[0][a].q0) /
+                                      (ch[1][a].cy - ch[0][a].cy);
+                                ++ny;
+                            }
+                        double p0 = 0;
+                        for (const auto& row : ch)
+                            for (const Child& c : row)
+                                if (c.in) {
+                                    sgx += c.gx;
+                                    sgy += c.gy;
+                                    p0 += c.q0 + c.gx * (cx - c.cx) + c.gy * (cy - c.cy);
+                                    ++n;
+                                }
+                        const float fgx = float(nx ? gx / nx : sgx / n),
+                                    fgy = float(ny ? gy / ny : sgy / n);
+                        p0 /= n;
+                        // Lower it under every child's plane over the child's box.
+                        double e = -std::numeric_limits<double>::infinity(), mag = 0;
+                        for (const auto& row : ch)
+                            for (const Child& c : row) {
+                                if (!c.in) continue;
+                                for (const double X : {c.x0, c.x1})
+                                    for (const double Y : {c.y0, c.y1}) {
+                                        const double up = double(fgx) * (X - cx) +
+                                                          double(fgy) * (Y - cy);
+                                        const double down =
+                                            c.gx * (X - c.cx) + c.gy * (Y - c.cy);
+                                        e = std::max(e, p0 + up - (c.q0 + down));
+                                        mag = std::max(mag, std::abs(p0) + std::abs(up) +
+                                                                std::abs(c.q0) +
+                                                                std::abs(down));
+                                    }
+                            }
+                        dst[size_t(j) * size_t(w) + size_t(i)] = {
+                            FloatBelow(p0 - e - 0x1p-40 * (1 + mag)), fgx, fgy,
+                            d.pyramids[d.levelOff[size_t(l)] + size_t(j) * size_t(w) +
+                                       size_t(i)]};
+                    }
             });
     }
 }
@@ -248,6 +367,7 @@ void RunConeSearch(const ConeSearchJob& job, ProgressCounter* progress) {
         d.pyramids.resize(off);
         BuildMinPyramid(d, hf.depth.data(), d.pyramids.data());
         d.dmin = d.pyramids[off - 1];
+        BuildLowerPlanes(d, hf.depth.data());
     } else {
         // Per texel, the directions in which it is limiting (IsLimiting): its neighbour
         // one step that way is strictly deeper.

@@ -64,6 +64,36 @@ RS_INLINE uint32_t Bits(const VI& m) {
 #endif
 }
 
+/// Lane-wise square root (correctly rounded, as std::sqrt).
+RS_INLINE VF Sqrt(const VF& v) {
+#if defined(__AVX512F__) && RS_CONE_SEARCH_LANES == 16
+    __m512 x;
+    __builtin_memcpy(&x, &v, sizeof(x));
+    x = _mm512_maskz_sqrt_ps(__mmask16(0xFFFF), x);  // (the unmasked form warns)
+    VF r;
+    __builtin_memcpy(&r, &x, sizeof(r));
+    return r;
+#elif defined(__AVX__) && RS_CONE_SEARCH_LANES == 8
+    __m256 x;
+    __builtin_memcpy(&x, &v, sizeof(x));
+    x = _mm256_sqrt_ps(x);
+    VF r;
+    __builtin_memcpy(&r, &x, sizeof(r));
+    return r;
+#elif defined(__SSE4_1__) && RS_CONE_SEARCH_LANES == 4
+    __m128 x;
+    __builtin_memcpy(&x, &v, sizeof(x));
+    x = _mm_sqrt_ps(x);
+    VF r;
+    __builtin_memcpy(&r, &x, sizeof(r));
+    return r;
+#else
+    VF r;
+    for (int k = 0; k < kLanes; ++k) r[k] = std::sqrt(v[k]);
+    return r;
+#endif
+}
+
 RS_INLINE VI Max(const VI& a, const VI& b) { return a > b ? a : b; }
 RS_INLINE VI Min(const VI& a, const VI& b) { return a < b ? a : b; }
 RS_INLINE VF Max(const VF& a, const VF& b) { return a > b ? a : b; }
@@ -75,6 +105,10 @@ RS_INLINE VF ToFloat(const VI& v) { return __builtin_convertvector(v, VF); }
 /// precision) always pass. docs/cone_maps.md, "The lane search".
 constexpr float kThresholdScale = 1.0f + 0x1p-16f;
 constexpr float kTiny = 0x1p-40f;
+/// The first-order cell bound skips a lane only where its lower bound exceeds the apex
+/// by this much relative to the magnitudes summed (the float error of the bound's
+/// evaluation is a few 2^-24 of them).
+constexpr float kFirstOrderSlack = 0x1p-16f;
 
 /// 0, 1, ..., kLanes - 1.
 const VI kIota = [] {
@@ -94,6 +128,7 @@ struct Tile {
     VI pi, pj;  ///< apex texel per lane
     VF a;       ///< apex depth per lane
     VF thr[kMaxSectors];
+    VF rinv[kMaxSectors];  ///< 1 / sqrt(thr), rounded (0 while thr is +inf)
     double best[kMaxSectors][kLanes];
     int32_t argX[kMaxSectors][kLanes], argY[kMaxSectors][kLanes];  ///< unwrapped
     uint32_t valid = 0;  ///< lanes with an apex that can have blockers
@@ -156,6 +191,7 @@ class Engine {
         for (int c = 0; c < d_.nChannels; ++c) {
             for (int k = 0; k < kLanes; ++k) {
                 t.thr[c][k] = INFINITY;
+                t.rinv[c][k] = 0.0f;
                 t.best[c][k] = kInfQ;
                 t.argX[c][k] = kNoSeed;
             }
@@ -269,6 +305,7 @@ class Engine {
             if (q < t.best[c][k]) {
                 t.best[c][k] = q;
                 t.thr[c][k] = float(q) * kThresholdScale;
+                t.rinv[c][k] = 1.0f / std::sqrt(t.thr[c][k]);
                 t.argX[c][k] = X;
                 t.argY[c][k] = Y;
             }
@@ -339,10 +376,51 @@ class Engine {
     /// below one of the channels' minima in `channels`.
     uint32_t NodeLanes(const Tile& t, int X0, int X1, int Y0, int Y1, float m,
                        uint32_t channels) const {
+        return Bits(BoundLanes(t, X0, X1, Y0, Y1, m, Threshold(t, channels)));
+    }
+
+    /// The largest threshold of `channels` per lane.
+    static VF Threshold(const Tile& t, uint32_t channels) {
         VF thr = t.thr[std::countr_zero(channels)];
         for (uint32_t c = channels & (channels - 1); c; c &= c - 1)
             thr = Max(thr, t.thr[std::countr_zero(c)]);
-        return Bits(BoundLanes(t, X0, X1, Y0, Y1, m, thr));
+        return thr;
+    }
+
+    /// The smallest 1 / sqrt(threshold) of `channels` per lane.
+    static VF Rinv(const Tile& t, uint32_t channels) {
+        VF r = t.rinv[std::countr_zero(channels)];
+        for (uint32_t c = channels & (channels - 1); c; c &= c - 1) {
+            const VF o = t.rinv[std::countr_zero(c)];
+            r = o < r ? o : r;
+        }
+        return r;
+    }
+
+    /// The first-order cell bound (docs/cone_maps.md, "The first-order cell bound"): the
+    /// lanes for which the cell (unwrapped box [X0, X1] x [Y0, Y1], lower plane `p`) may
+    /// hold a texel t with |t - s| < R (a - d_t), R = 1 / rinv >= sqrt(q) (rinv is 1 /
+    /// sqrt(thr) rounded, and thr exceeds q by 2^-16). With v = c - s (c the cell's
+    /// centre) and the map's metric, |t - s| >= <t - s, v> / |v| (Cauchy-Schwarz) and d_t
+    /// >= q0 + g (t - c), so over the box d_t + |t - s| / R >= q0 + |v| / R - sum |g + w
+    /// v / (|v| R)| h (h: the box's half extents). Multiplied by |v| (no division), a
+    /// lane is skipped where that is >= a beyond the float slack, and only where |v| > 0.
+    VI FirstOrderLanes(const Tile& t, const ConeSearchData::LowerPlane& p, int X0, int X1,
+                       int Y0, int Y1, const VF& rinv) const {
+        // Half-integers below 2^23: exact, as are the differences.
+        const float cx = 0.5f * float(X0 + X1), cy = 0.5f * float(Y0 + Y1);
+        const float hx = 0.5f * float(X1 - X0), hy = 0.5f * float(Y1 - Y0);
+        const VF vx = cx - ToFloat(t.pi), vy = cy - ToFloat(t.pj);
+        const VF wvx = vx * wx_, wvy = vy * wy_;
+        const VF n2 = vx * wvx + vy * wvy;
+        const VF norm = Sqrt(n2);
+        const VF sx = p.gx * norm + wvx * rinv, sy = p.gy * norm + wvy * rinv;
+        const VF ax = Max(sx, -sx) * hx, ay = Max(sy, -sy) * hy;
+        const VF reach = n2 * rinv;
+        const VF lower = p.q0 * norm + reach - ax - ay;
+        const VF an = t.a * norm;
+        const VF mag = (std::abs(p.q0) + t.a) * norm + reach + ax + ay;
+        return ~((norm > 0.0f) & (lower - an >= mag * kFirstOrderSlack));
     }
 
     /// The lanes whose lower bound over the box (nearest offset in the lane's window,
@@ -377,8 +455,13 @@ class Engine {
                 ? 1u
                 : ChannelsOfRect(d_, X0 - xMax, X1 - t.x0, Y0 - yMax, Y1 - t.y0);
         if (!channels) return 0;
+        // The cell's lower plane and least depth share a cache line (levels >= 1).
+        const ConeSearchData::LowerPlane* plane =
+            l >= 1 && !d_.planes.empty() ? &d_.planes[cell - d_.levelOff[1]] : nullptr;
         float m;
-        if (d_.limiting) {
+        if (plane) {
+            m = plane->least;
+        } else if (d_.limiting) {
             uint32_t cls = ClassesOfRect(X0 - xMax, X1 - t.x0, Y0 - yMax, Y1 - t.y0);
             m = INFINITY;
             for (; cls; cls &= cls - 1)
@@ -388,7 +471,9 @@ class Engine {
         } else {
             m = d_.pyramids[cell];
         }
-        const uint32_t lanes = NodeLanes(t, X0, X1, Y0, Y1, m, channels) & n.lanes;
+        uint32_t lanes = NodeLanes(t, X0, X1, Y0, Y1, m, channels) & n.lanes;
+        if (lanes && plane)
+            lanes &= Bits(FirstOrderLanes(t, *plane, X0, X1, Y0, Y1, Rinv(t, channels)));
         if (!lanes || l > kLeafLevel) return lanes;
         for (int Y = Y0; Y <= Y1; ++Y)
             for (int X = X0; X <= X1; ++X) {

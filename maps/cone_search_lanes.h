@@ -56,6 +56,16 @@ struct ConeSearchData {
     /// direction class, holding the depth of the texels limiting for that class (+inf
     /// elsewhere), back to back.
     std::vector<float> pyramids;
+    /// A lower plane of a quadtree cell: every texel t of the cell (unwrapped box
+    /// [X0, X1] x [Y0, Y1], centre c) has depth >= q0 + gx (t.x - c.x) + gy (t.y - c.y);
+    /// and the cell's least depth (its value in `pyramids`).
+    struct LowerPlane {
+        float q0, gx, gy, least;
+    };
+    /// Per cell of levels 1..top (index: pyramid index - levelOff[1]), for the
+    /// first-order cell bound (docs/cone_maps.md, "The first-order cell bound"); empty
+    /// where unused (rip-maps, limiting).
+    std::vector<LowerPlane> planes;
     std::vector<uint8_t> flags;  ///< limiting: per texel, bit ClassBit(sx, sy) set when
                                  ///< the neighbour (i + sx, j + sy) is strictly deeper
     /// Sector kinds: rip-maps (min over every aligned 2^lx x 2^ly rectangle) in sheared
