@@ -17,6 +17,7 @@
 #include "maps/cone_search.h"
 #include "maps/map_cache.h"
 #include "maps/mip_pyramid.h"
+#include "tests/common/test_files.h"
 #include "texture/image_io.h"
 #include "texture/procedural.h"
 #include "texture/sampler.h"
@@ -693,26 +694,21 @@ TEST(ConeMap, StoredMapIsTheFloatMapItselfOrItsQuantisation) {
 }
 
 TEST(ConeMap, WriterGivenTheStoredMapWritesTheSameFile) {
-    const auto dir = std::filesystem::temp_directory_path() /
-                     ("rs_cone_stored_" + std::to_string(::getpid()));
-    std::filesystem::create_directories(dir);
+    using reliefsim::testing::Slurp;
+    const auto dir = reliefsim::testing::Scratch("rs_cone_stored_");
     const ConeMap m = GenerateConeMap(MakeBuiltinMap("shapes", 16, 16), ConeKind::Acm8);
-    const auto bytes = [](const std::filesystem::path& p) {
-        std::ifstream in(p, std::ios::binary);
-        return std::string(std::istreambuf_iterator<char>(in), {});
-    };
     for (const ConeEncoding e : {ConeEncoding::Float, ConeEncoding::U8}) {
         ConeMap scratch;
         const ConeMap& stored = StoredConeMap(m, e, scratch);
         WriteConeMap((dir / "a.exr").string(), m, e);
         WriteConeMap((dir / "b.exr").string(), m, e, nullptr, &stored);
-        const std::string a = bytes(dir / "a.exr");
+        const std::string a = Slurp(dir / "a.exr");
         EXPECT_FALSE(a.empty());
-        EXPECT_EQ(a, bytes(dir / "b.exr")) << ToString(e);
+        EXPECT_EQ(a, Slurp(dir / "b.exr")) << ToString(e);
     }
     // The u8 file holds the quantised ratios, not the float ones.
     WriteConeMap((dir / "f.exr").string(), m, ConeEncoding::Float);
-    EXPECT_NE(bytes(dir / "a.exr"), bytes(dir / "f.exr"));
+    EXPECT_NE(Slurp(dir / "a.exr"), Slurp(dir / "f.exr"));
     std::filesystem::remove_all(dir);
 }
 
