@@ -45,6 +45,13 @@ inline double CandidateQ(int64_t s, float apex, float blocker) {
     return double(s) / (dd * dd);
 }
 
+/// `v` rounded to a float at most `v` (toward -inf).
+inline float FloatAtMost(double v) {
+    float r = float(v);
+    if (double(r) > v) r = std::nextafter(r, -std::numeric_limits<float>::infinity());
+    return r;
+}
+
 /// Rounds a ratio (>= 0) to a float strictly below it (unless exactly zero), capped at
 /// kConeRatioCap: the stored ratio never exceeds the exact one.
 float RoundDownStrict(double r);

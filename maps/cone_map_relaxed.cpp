@@ -138,12 +138,8 @@ float RelaxedPairRatio(const DepthField& hf, int ti, int tj, int dx, int dy, int
 
 namespace {
 
-/// v rounded to a float at most v (and at least 0).
-float FloatAtMost(double v) {
-    float r = float(v);
-    if (double(r) > v) r = std::nextafter(r, 0.0f);
-    return std::max(r, 0.0f);
-}
+/// v rounded to a float at most v, and at least 0.
+float NonNegFloatAtMost(double v) { return std::max(FloatAtMost(v), 0.0f); }
 
 /// Bounds on where the listing's float march can stop, and the exit field: per texel t
 /// (depth b) and sector k, L[t * kSectors + k] <= the uv distance from t's centre to
@@ -177,7 +173,8 @@ std::array<float, 256> ExitCodes(int W, int H, float edge) {
     const double lo = 0.25 / double(std::max(W, H));
     const double r = std::pow(std::max(double(edge), 2 * lo) / lo, 1.0 / 253.0);
     d[0] = 0.0f;
-    for (int c = 1; c < 255; ++c) d[size_t(c)] = FloatAtMost(lo * std::pow(r, c - 1));
+    for (int c = 1; c < 255; ++c)
+        d[size_t(c)] = NonNegFloatAtMost(lo * std::pow(r, c - 1));
     d[254] = std::min(d[254], edge);
     d[255] = kInfF;
     for (int c = 1; c < 256; ++c) RS_CHECK(d[size_t(c)] > d[size_t(c - 1)]);
@@ -288,7 +285,8 @@ ExitWindow MakeExitWindow(int W, int H, int Rx, int Ry, double e) {
                                          ay = std::max({0.0, y0, -y1});
                             const ExitOffset o{
                                 dx, dy,
-                                FloatAtMost(std::sqrt(ax * ax + ay * ay) * (1 - 1e-12)),
+                                NonNegFloatAtMost(std::sqrt(ax * ax + ay * ay) *
+                                                  (1 - 1e-12)),
                                 RectSectorMask(x0, x1, y0, y1)};
                             offs.push_back(o);
                             t.minDist = std::min(t.minDist, o.dist);
@@ -381,7 +379,7 @@ ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted
     const double e = f.eps;
     const ExitWindow win = MakeExitWindow(W, H, Rx, Ry, e);
     // Every cell outside the window is at least this far (its dilation included).
-    const float edge = FloatAtMost(std::min((Rx + 0.5) / W, (Ry + 0.5) / H) - e);
+    const float edge = NonNegFloatAtMost(std::min((Rx + 0.5) / W, (Ry + 0.5) / H) - e);
     float dmax = hf.depth[0];
     for (float d : hf.depth) dmax = std::max(dmax, d);
     // Coded as each texel is done (a float field would take 64 bytes per texel).
@@ -530,11 +528,11 @@ RelaxedOffset MakeRelaxedOffset(const Offset& off, const OffsetTile& t, const Ge
                                 int W, int H, int steps) {
     RelaxedOffset ro;
     const double dist = std::sqrt(double(off.s)) / g.scale;
-    ro.dist = FloatAtMost(dist);
-    ro.distLo = FloatAtMost(std::max(0.0, dist - 0x1p-20) * (1.0 - 0x1p-19));
-    ro.invD = FloatAtMost((1.0 - 0x1p-20) * (1.0 - 0x1p-40) / (dist + 0x1p-21));
-    ro.stepK = FloatAtMost(std::max(0.0, dist - 0x1p-22) / double(steps) *
-                           (1.0 - 0x1p-20) * (1.0 - 0x1p-30));
+    ro.dist = NonNegFloatAtMost(dist);
+    ro.distLo = NonNegFloatAtMost(std::max(0.0, dist - 0x1p-20) * (1.0 - 0x1p-19));
+    ro.invD = NonNegFloatAtMost((1.0 - 0x1p-20) * (1.0 - 0x1p-40) / (dist + 0x1p-21));
+    ro.stepK = NonNegFloatAtMost(std::max(0.0, dist - 0x1p-22) / double(steps) *
+                                 (1.0 - 0x1p-20) * (1.0 - 0x1p-30));
     ro.dx = off.dx;
     ro.dy = off.dy;
     ro.fdx = float(off.dx) / float(W);
@@ -818,7 +816,7 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
     dw.shallow.assign(hf.depth.size(), 0.0f);
     for (size_t t = 0; t < dw.shallow.size(); ++t) {
         const double b = double(hf.depth[t]);
-        if (b > 0) dw.shallow[t] = FloatAtMost((1.0 - b) / b);
+        if (b > 0) dw.shallow[t] = NonNegFloatAtMost((1.0 - b) / b);
     }
     RelaxedGroups groups;
     GroupTileOffsets(to, g, W, H, p.searchSteps, groups);

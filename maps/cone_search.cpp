@@ -82,21 +82,81 @@ void BuildMinPyramid(const ConeSearchData& d, const float* base, float* out) {
     }
 }
 
-/// `v` rounded to a float at most `v`.
-float FloatBelow(double v) {
-    float r = float(v);
-    if (double(r) > v) r = std::nextafter(r, -std::numeric_limits<float>::infinity());
-    return r;
+/// A child cell for CombinePlanes: its box (texel centres) and its lower plane about the
+/// box's centre (a texel: a box of one point and a flat plane at its depth).
+struct PlaneChild {
+    double x0, x1, y0, y1;
+    double q0, gx, gy;
+    float least;
+    double Cx() const { return 0.5 * (x0 + x1); }
+    double Cy() const { return 0.5 * (y0 + y1); }
+};
+
+/// The lower plane (ConeSearchData::LowerPlane) of the cell that `ch[0..n)` tile, about
+/// the centre of their union. Its slope in x is the mean finite difference between
+/// children of the same row (the same y extent), likewise in y; where no such pair
+/// exists, the children's mean slope. Its height at the centre is the mean of the
+/// children's planes there, lowered until the plane lies under each child's plane at the
+/// child's corners, hence under every texel (any plane is valid: the lowering makes it
+/// so). In double; q0 is rounded down to a float against the float slopes, with a guard
+/// far above double rounding.
+ConeSearchData::LowerPlane CombinePlanes(const PlaneChild* ch, int n) {
+    double X0 = ch[0].x0, X1 = ch[0].x1, Y0 = ch[0].y0, Y1 = ch[0].y1;
+    for (int i = 1; i < n; ++i) {
+        X0 = std::min(X0, ch[i].x0), X1 = std::max(X1, ch[i].x1);
+        Y0 = std::min(Y0, ch[i].y0), Y1 = std::max(Y1, ch[i].y1);
+    }
+    const double cx = 0.5 * (X0 + X1), cy = 0.5 * (Y0 + Y1);
+    double gx = 0, gy = 0, sgx = 0, sgy = 0, p0 = 0;
+    int nx = 0, ny = 0;
+    float least = std::numeric_limits<float>::infinity();
+    for (int i = 0; i < n; ++i) {
+        const PlaneChild& c = ch[i];
+        for (int j = i + 1; j < n; ++j) {
+            const PlaneChild& o = ch[j];
+            if (c.y0 == o.y0 && c.y1 == o.y1 && c.x0 != o.x0) {
+                gx += (o.q0 - c.q0) / (o.Cx() - c.Cx());
+                ++nx;
+            } else if (c.x0 == o.x0 && c.x1 == o.x1 && c.y0 != o.y0) {
+                gy += (o.q0 - c.q0) / (o.Cy() - c.Cy());
+                ++ny;
+            }
+        }
+        sgx += c.gx;
+        sgy += c.gy;
+        p0 += c.q0 + c.gx * (cx - c.Cx()) + c.gy * (cy - c.Cy());
+        least = std::min(least, c.least);
+    }
+    const float fgx = float(nx ? gx / nx : sgx / n), fgy = float(ny ? gy / ny : sgy / n);
+    p0 /= n;
+    // Lower it under every child's plane over the child's box.
+    double e = -std::numeric_limits<double>::infinity(), mag = 0;
+    for (int i = 0; i < n; ++i) {
+        const PlaneChild& c = ch[i];
+        for (const double X : {c.x0, c.x1})
+            for (const double Y : {c.y0, c.y1}) {
+                const double up = double(fgx) * (X - cx) + double(fgy) * (Y - cy);
+                const double down = c.gx * (X - c.Cx()) + c.gy * (Y - c.Cy());
+                e = std::max(e, p0 + up - (c.q0 + down));
+                mag = std::max(
+                    mag, std::abs(p0) + std::abs(up) + std::abs(c.q0) + std::abs(down));
+            }
+    }
+    return {FloatAtMost(p0 - e - 0x1p-40 * (1 + mag)), fgx, fgy, least};
+}
+
+/// The texel box [lo, hi] of cell c at level k along an axis of n texels.
+double CellLo(int c, int k) { return double(c << k); }
+double CellHi(int c, int k, int n) { return double(std::min((c + 1) << k, n) - 1); }
+
+/// A cell's child for CombinePlanes from its plane and box.
+PlaneChild ChildOf(const ConeSearchData::LowerPlane& p, double x0, double x1, double y0,
+                   double y1) {
+    return {x0, x1, y0, y1, p.q0, p.gx, p.gy, p.least};
 }
 
 /// The lower planes of the quadtree's cells (ConeSearchData::LowerPlane), levels 1..top,
-/// each from its children's (level 0: the texels, flat). The slope is the children's
-/// finite difference across the cell where both columns (rows) of children exist, else
-/// their mean slope; the height at the centre is the mean of the children's planes there,
-/// lowered until the plane lies under each child's plane at the child's corners, hence
-/// under every texel (any plane is valid: the lowering makes it so). In double; q0 is
-/// rounded down to a float against the float slopes, with a guard far above double
-/// rounding.
+/// each from its (at most four) children's; level 0: the texels, flat.
 void BuildLowerPlanes(ConeSearchData& d, const float* depth) {
     using LowerPlane = ConeSearchData::LowerPlane;
     if (d.top < 1) return;
@@ -109,94 +169,98 @@ void BuildLowerPlanes(ConeSearchData& d, const float* depth) {
         const LowerPlane* src =
             l >= 2 ? d.planes.data() + (d.levelOff[size_t(l - 1)] - d.levelOff[1])
                    : nullptr;
-        // The texel box of cell c at level k along an axis of n texels.
-        const auto lo = [](int c, int k) { return double(c << k); };
-        const auto hi = [](int c, int k, int n) {
-            return double(std::min((c + 1) << k, n) - 1);
-        };
-        tbb::parallel_for(
-            tbb::blocked_range<int>(0, h, 16), [&](const tbb::blocked_range<int>& r) {
-                for (int j = r.begin(); j < r.end(); ++j)
-                    for (int i = 0; i < w; ++i) {
-                        const double cx = 0.5 * (lo(i, l) + hi(i, l, W)),
-                                     cy = 0.5 * (lo(j, l) + hi(j, l, H));
-                        struct Child {
-                            double q0, gx, gy, cx, cy, x0, x1, y0, y1;
-                            bool in;
-                        } ch[2][2];
-                        for (int b = 0; b < 2; ++b)
-                            for (int a = 0; a < 2; ++a) {
-                                Child& c = ch[b][a];
-                                const int ci = 2 * i + a, cj = 2 * j + b;
-                                c.in = ci < pw && cj < ph;
-                                if (!c.in) continue;
-                                c.x0 = lo(ci, l - 1);
-                                c.x1 = hi(ci, l - 1, W);
-                                c.y0 = lo(cj, l - 1);
-                                c.y1 = hi(cj, l - 1, H);
-                                c.cx = 0.5 * (c.x0 + c.x1);
-                                c.cy = 0.5 * (c.y0 + c.y1);
-                                if (src) {
-                                    const LowerPlane& p =
-                                        src[size_t(cj) * size_t(pw) + size_t(ci)];
-                                    c.q0 = p.q0;
-                                    c.gx = p.gx;
-                                    c.gy = p.gy;
-                                } else {
-                                    c.q0 = depth[size_t(cj) * size_t(W) + size_t(ci)];
-                                    c.gx = c.gy = 0;
-                                }
-                            }
-                        // Slopes.
-                        double gx = 0, gy = 0, sgx = 0, sgy = 0;
-                        int nx = 0, ny = 0, n = 0;
-                        for (int b = 0; b < 2; ++b)
-                            if (ch[b][0].in && ch[b][1].in) {
-                                gx += (ch[b][1].q0 - ch[b][0].q0) /
-                                      (ch[b][1].cx - ch[b][0].cx);
-                                ++nx;
-                            }
-                        for (int a = 0; a < 2; ++a)
-                            if (ch[0][a].in && ch[1][a].in) {
-                                gy += (ch[1][a].q0 - ch[0][a].q0) /
-                                      (ch[1][a].cy - ch[0][a].cy);
-                                ++ny;
-                            }
-                        double p0 = 0;
-                        for (const auto& row : ch)
-                            for (const Child& c : row)
-                                if (c.in) {
-                                    sgx += c.gx;
-                                    sgy += c.gy;
-                                    p0 += c.q0 + c.gx * (cx - c.cx) + c.gy * (cy - c.cy);
-                                    ++n;
-                                }
-                        const float fgx = float(nx ? gx / nx : sgx / n),
-                                    fgy = float(ny ? gy / ny : sgy / n);
-                        p0 /= n;
-                        // Lower it under every child's plane over the child's box.
-                        double e = -std::numeric_limits<double>::infinity(), mag = 0;
-                        for (const auto& row : ch)
-                            for (const Child& c : row) {
-                                if (!c.in) continue;
-                                for (const double X : {c.x0, c.x1})
-                                    for (const double Y : {c.y0, c.y1}) {
-                                        const double up = double(fgx) * (X - cx) +
-                                                          double(fgy) * (Y - cy);
-                                        const double down =
-                                            c.gx * (X - c.cx) + c.gy * (Y - c.cy);
-                                        e = std::max(e, p0 + up - (c.q0 + down));
-                                        mag = std::max(mag, std::abs(p0) + std::abs(up) +
-                                                                std::abs(c.q0) +
-                                                                std::abs(down));
-                                    }
-                            }
-                        dst[size_t(j) * size_t(w) + size_t(i)] = {
-                            FloatBelow(p0 - e - 0x1p-40 * (1 + mag)), fgx, fgy,
-                            d.pyramids[d.levelOff[size_t(l)] + size_t(j) * size_t(w) +
-                                       size_t(i)]};
+        const auto cell = [&](int i, int j) {
+            PlaneChild ch[4];
+            int n = 0;
+            for (int cj = 2 * j; cj < std::min(2 * j + 2, ph); ++cj)
+                for (int ci = 2 * i; ci < std::min(2 * i + 2, pw); ++ci) {
+                    const double x0 = CellLo(ci, l - 1), x1 = CellHi(ci, l - 1, W),
+                                 y0 = CellLo(cj, l - 1), y1 = CellHi(cj, l - 1, H);
+                    if (src) {
+                        ch[n++] = ChildOf(src[size_t(cj) * size_t(pw) + size_t(ci)], x0,
+                                          x1, y0, y1);
+                    } else {
+                        const float b = depth[size_t(cj) * size_t(W) + size_t(ci)];
+                        ch[n++] = {x0, x1, y0, y1, b, 0.0, 0.0, b};
                     }
-            });
+                }
+            return CombinePlanes(ch, n);
+        };
+        tbb::parallel_for(tbb::blocked_range<int>(0, h, 16),
+                          [&](const tbb::blocked_range<int>& r) {
+                              for (int j = r.begin(); j < r.end(); ++j)
+                                  for (int i = 0; i < w; ++i)
+                                      dst[size_t(j) * size_t(w) + size_t(i)] = cell(i, j);
+                          });
+    }
+}
+
+/// The lower planes of a rip-map's cells (RipMap::planes) on the traversal's chain of
+/// levels (RipSplitsC1) of at least 2^kRipPlaneLevel texels, in its sheared coordinates,
+/// into `buf` (reused by the passes): the chain's smallest level from its texels, each
+/// larger one from its two halves.
+void BuildRipPlanes(ConeSearchData::RipMap& rip, int W, int H,
+                    std::vector<ConeSearchData::LowerPlane>& buf) {
+    using LowerPlane = ConeSearchData::LowerPlane;
+    using Rip = ConeSearchData::RipMap;
+    struct Level {
+        int lx, ly;
+    };
+    std::vector<Level> chain;  // from the root down
+    for (int lx = rip.levelsX, ly = rip.levelsY; lx + ly >= kRipPlaneLevel;) {
+        chain.push_back({lx, ly});
+        if (RipSplitsC1(lx, ly))
+            --lx;
+        else
+            --ly;
+    }
+    rip.planeOffset.assign(rip.offset.size(), Rip::kNoPlanes);
+    size_t total = 0;
+    for (const Level& v : chain) {
+        if (v.lx + v.ly > rip.levelsX + rip.levelsY - kRipPlaneTopSkip) continue;
+        rip.planeOffset[size_t(v.lx) * size_t(rip.levelsY + 1) + size_t(v.ly)] = total;
+        total += size_t(rip.cellsX[size_t(v.lx)]) * size_t(rip.cellsY[size_t(v.ly)]);
+    }
+    buf.resize(total);
+    rip.planes = buf.data();
+    const float* texels = rip.mins;  // level (0, 0)
+    for (size_t k = chain.size(); k-- > 0;) {
+        const int lx = chain[k].lx, ly = chain[k].ly;
+        const int w = rip.cellsX[size_t(lx)], h = rip.cellsY[size_t(ly)];
+        const size_t at =
+            rip.planeOffset[size_t(lx) * size_t(rip.levelsY + 1) + size_t(ly)];
+        if (at == Rip::kNoPlanes) break;  // the larger levels have none
+        LowerPlane* dst = buf.data() + at;
+        const bool fromTexels = k + 1 == chain.size();
+        const auto cell = [&](int i, int j) {
+            PlaneChild ch[1 << kRipPlaneLevel];
+            int n = 0;
+            if (fromTexels) {
+                for (int c2 = j << ly; c2 < std::min((j + 1) << ly, H); ++c2)
+                    for (int c1 = i << lx; c1 < std::min((i + 1) << lx, W); ++c1) {
+                        const float b = texels[size_t(c2) * size_t(W) + size_t(c1)];
+                        ch[n++] = {double(c1), double(c1), double(c2), double(c2),
+                                   b,          0.0,        0.0,        b};
+                    }
+                return CombinePlanes(ch, n);
+            }
+            const int kx = chain[k + 1].lx, ky = chain[k + 1].ly;
+            const int cw = rip.cellsX[size_t(kx)], chh = rip.cellsY[size_t(ky)];
+            for (int cj = j << (ly - ky); cj < std::min((j + 1) << (ly - ky), chh); ++cj)
+                for (int ci = i << (lx - kx); ci < std::min((i + 1) << (lx - kx), cw);
+                     ++ci)
+                    ch[n++] =
+                        ChildOf(*rip.PlaneAt(kx, ky, ci, cj), CellLo(ci, kx),
+                                CellHi(ci, kx, W), CellLo(cj, ky), CellHi(cj, ky, H));
+            return CombinePlanes(ch, n);
+        };
+        const int grain = std::max(1, (1 << 14) / w);
+        tbb::parallel_for(tbb::blocked_range<int>(0, h, grain),
+                          [&](const tbb::blocked_range<int>& r) {
+                              for (int j = r.begin(); j < r.end(); ++j)
+                                  for (int i = 0; i < w; ++i)
+                                      dst[size_t(j) * size_t(w) + size_t(i)] = cell(i, j);
+                          });
     }
 }
 
@@ -364,10 +428,9 @@ void RunConeSearch(const ConeSearchJob& job, ProgressCounter* progress) {
         RS_CHECK(!d.limiting);
         d.dmin = *std::min_element(hf.depth.begin(), hf.depth.end());
     } else if (!d.limiting) {
-        d.pyramids.resize(off);
-        BuildMinPyramid(d, hf.depth.data(), d.pyramids.data());
-        d.dmin = d.pyramids[off - 1];
+        // The lower planes hold the least depths too: no pyramid.
         BuildLowerPlanes(d, hf.depth.data());
+        d.dmin = d.planes.empty() ? hf.depth[0] : d.planes.back().least;
     } else {
         // Per texel, the directions in which it is limiting (IsLimiting): its neighbour
         // one step that way is strictly deeper.
@@ -409,17 +472,24 @@ void RunConeSearch(const ConeSearchJob& job, ProgressCounter* progress) {
     // same buffer.
     std::unique_ptr<float[]> ripCells;
     size_t ripCellsSize = 0;
+    std::vector<ConeSearchData::LowerPlane> ripPlanes;
     for (int pass = 0; pass < passes; ++pass) {
         d.ripPass = pass;
         d.passChannels = d.rips.empty() ? (1u << d.nChannels) - 1u
                                         : d.rips[size_t(pass)].Layout().Channels();
-        if (!d.rips.empty()) BuildRipMap(d, d.rips[size_t(pass)], ripCells, ripCellsSize);
+        if (!d.rips.empty()) {
+            BuildRipMap(d, d.rips[size_t(pass)], ripCells, ripCellsSize);
+            BuildRipPlanes(d.rips[size_t(pass)], d.W, d.H, ripPlanes);
+        }
         tbb::parallel_for(tbb::blocked_range<int>(0, (tileRows + kBand - 1) / kBand, 1),
                           [&](const tbb::blocked_range<int>& r) {
                               for (int b = r.begin(); b < r.end(); ++b)
                                   fn(d, b * kBand, std::min(tileRows, b * kBand + kBand));
                           });
-        if (!d.rips.empty()) d.rips[size_t(pass)].mins = nullptr;
+        if (!d.rips.empty()) {
+            d.rips[size_t(pass)].mins = nullptr;
+            d.rips[size_t(pass)].planes = nullptr;
+        }
     }
 }
 

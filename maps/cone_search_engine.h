@@ -97,6 +97,7 @@ RS_INLINE VF Sqrt(const VF& v) {
 RS_INLINE VI Max(const VI& a, const VI& b) { return a > b ? a : b; }
 RS_INLINE VI Min(const VI& a, const VI& b) { return a < b ? a : b; }
 RS_INLINE VF Max(const VF& a, const VF& b) { return a > b ? a : b; }
+RS_INLINE VF Min(const VF& a, const VF& b) { return a < b ? a : b; }
 RS_INLINE VF ToFloat(const VI& v) { return __builtin_convertvector(v, VF); }
 
 /// A float test passes every candidate whose exact q (CandidateQ, double) is below a
@@ -398,28 +399,49 @@ class Engine {
     }
 
     /// The first-order cell bound (docs/cone_maps.md, "The first-order cell bound"): the
-    /// lanes for which the cell (unwrapped box [X0, X1] x [Y0, Y1], lower plane `p`) may
-    /// hold a texel t with |t - s| < R (a - d_t), R = 1 / rinv >= sqrt(q) (rinv is 1 /
-    /// sqrt(thr) rounded, and thr exceeds q by 2^-16). With v = c - s (c the cell's
-    /// centre) and the map's metric, |t - s| >= <t - s, v> / |v| (Cauchy-Schwarz) and d_t
-    /// >= q0 + g (t - c), so over the box d_t + |t - s| / R >= q0 + |v| / R - sum |g + w
-    /// v / (|v| R)| h (h: the box's half extents). Multiplied by |v| (no division), a
-    /// lane is skipped where that is >= a beyond the float slack, and only where |v| > 0.
-    VI FirstOrderLanes(const Tile& t, const ConeSearchData::LowerPlane& p, int X0, int X1,
-                       int Y0, int Y1, const VF& rinv) const {
+    /// lanes for which a cell may hold a texel t with |t - s| < R (a - d_t), R = 1 / rinv
+    /// >= sqrt(q) (rinv is 1 / sqrt(thr) rounded, and thr exceeds q by 2^-16). The cell
+    /// is a box [c1 - h1, c1 + h1] x [c2 - h2, c2 + h2] in coordinates (c1, c2) whose
+    /// real offsets are (c1 + Alpha c2, c2 + Beta c1) (the quadtree: Alpha = Beta = 0; a
+    /// rip cell: its shear), with real centre (cx, cy) and lower plane `p` in (c1, c2).
+    /// With v = c - s and the map's metric, Cauchy-Schwarz gives |t - s| >= <t - s, v> /
+    /// |v|, and the plane gives d_t >= q0 + g (t - c); so over the cell, d_t + |t - s| / R
+    /// is at least q0 + |v| / R - sum_i |g_i + <e_i, w v> / (|v| R)| h_i (e_i: the real
+    /// offset of a unit step in c_i). Multiplied by |v| (no division), a lane is skipped
+    /// where that is >= a by more than 2^-16 of the terms' magnitudes before any
+    /// cancellation, and only where |v| > 0.
+    template <int Alpha, int Beta>
+    VI FirstOrderLanes(const Tile& t, const ConeSearchData::LowerPlane& p, float cx,
+                       float cy, float h1, float h2, const VF& rinv) const {
+        return FirstOrderLanes<Alpha, Beta>(t, VF{} + p.q0, VF{} + std::abs(p.q0), p.gx,
+                                            p.gy, VF{} + cx, VF{} + cy, VF{} + h1,
+                                            VF{} + h2, rinv);
+    }
+
+    /// The same per lane, over a box of its own (centre (cx, cy), half extents h1, h2;
+    /// q0 the plane's value at its centre, q0mag the magnitude of the terms it was
+    /// summed from).
+    template <int Alpha, int Beta>
+    VI FirstOrderLanes(const Tile& t, const VF& q0, const VF& q0mag, float g1, float g2,
+                       const VF& cx, const VF& cy, const VF& h1, const VF& h2,
+                       const VF& rinv) const {
         // Half-integers below 2^23: exact, as are the differences.
-        const float cx = 0.5f * float(X0 + X1), cy = 0.5f * float(Y0 + Y1);
-        const float hx = 0.5f * float(X1 - X0), hy = 0.5f * float(Y1 - Y0);
         const VF vx = cx - ToFloat(t.pi), vy = cy - ToFloat(t.pj);
         const VF wvx = vx * wx_, wvy = vy * wy_;
         const VF n2 = vx * wvx + vy * wvy;
         const VF norm = Sqrt(n2);
-        const VF sx = p.gx * norm + wvx * rinv, sy = p.gy * norm + wvy * rinv;
-        const VF ax = Max(sx, -sx) * hx, ay = Max(sy, -sy) * hy;
+        const VF u1 = Beta == 0 ? wvx : wvx + float(Beta) * wvy;
+        const VF u2 = Alpha == 0 ? wvy : float(Alpha) * wvx + wvy;
+        const VF s1 = g1 * norm + u1 * rinv, s2 = g2 * norm + u2 * rinv;
+        const VF a1 = Max(s1, -s1) * h1, a2 = Max(s2, -s2) * h2;
         const VF reach = n2 * rinv;
-        const VF lower = p.q0 * norm + reach - ax - ay;
+        const VF lower = q0 * norm + reach - a1 - a2;
         const VF an = t.a * norm;
-        const VF mag = (std::abs(p.q0) + t.a) * norm + reach + ax + ay;
+        // Magnitudes of the slope terms before cancellation.
+        const VF awx = Max(wvx, -wvx), awy = Max(wvy, -wvy);
+        const VF m1 = (Beta == 0 ? awx : awx + awy) * rinv + std::abs(g1) * norm;
+        const VF m2 = (Alpha == 0 ? awy : awx + awy) * rinv + std::abs(g2) * norm;
+        const VF mag = (q0mag + t.a) * norm + reach + m1 * h1 + m2 * h2;
         return ~((norm > 0.0f) & (lower - an >= mag * kFirstOrderSlack));
     }
 
@@ -469,11 +491,13 @@ class Engine {
                     m,
                     d_.pyramids[size_t(std::countr_zero(cls)) * d_.pyramidSize + cell]);
         } else {
-            m = d_.pyramids[cell];
+            m = d_.field->depth[cell];  // level 0 (a 1x1 map's root): the texel
         }
         uint32_t lanes = NodeLanes(t, X0, X1, Y0, Y1, m, channels) & n.lanes;
         if (lanes && plane)
-            lanes &= Bits(FirstOrderLanes(t, *plane, X0, X1, Y0, Y1, Rinv(t, channels)));
+            lanes &= Bits(FirstOrderLanes<0, 0>(
+                t, *plane, 0.5f * float(X0 + X1), 0.5f * float(Y0 + Y1),
+                0.5f * float(X1 - X0), 0.5f * float(Y1 - Y0), Rinv(t, channels)));
         if (!lanes || l > kLeafLevel) return lanes;
         for (int Y = Y0; Y <= Y1; ++Y)
             for (int X = X0; X <= X1; ++X) {
@@ -572,9 +596,10 @@ class Engine {
 
     /// The lanes of `n.lanes` for which rip cell n can hold a blocker below the minimum
     /// of a sector it meets from that lane's apex.
+    template <int L>
     RS_INLINE uint32_t RipTest(Tile& t, const ConeSearchData::RipMap& rip,
-                               const RipLayout& cfg, const RipFrame& f,
-                               const RipNode& n) {
+                               const RipFrame& f, const RipNode& n) {
+        constexpr const RipLayout& cfg = kRipLayouts[L];
         const int a = cfg.alpha, bt = cfg.beta;
         const RipBox box = BoxOf(n);
         const int A0 = box.A0, A1 = box.A1, B0 = box.B0, B1 = box.B1;
@@ -595,15 +620,20 @@ class Engine {
         const int X0 = A0 + std::min(a * B0, a * B1), X1 = A1 + std::max(a * B0, a * B1);
         const int Y0 = B0 + std::min(bt * A0, bt * A1),
                   Y1 = B1 + std::max(bt * A0, bt * A1);
-        const float m = rip.At(n.lx, n.ly, n.cx, n.cy);
+        // The cell's lower plane and least depth share a cache line (large cells of
+        // the traversal's chain).
+        const ConeSearchData::LowerPlane* plane = rip.PlaneAt(n.lx, n.ly, n.cx, n.cy);
+        const float m = plane ? plane->least : rip.At(n.lx, n.ly, n.cx, n.cy);
         // Per lane, the largest threshold of the channels whose quadrant the cell
-        // meets (the same sign test as above, with the lane's own offsets).
+        // meets (the same sign test as above, with the lane's own offsets), and their
+        // smallest 1 / sqrt(threshold).
         const VI lo1v = A0 - f.lc1, hi1v = A1 - f.lc1, lo2v = B0 - f.lc2,
                  hi2v = B1 - f.lc2;
         VF thr = VF{} - INFINITY;
-        VI meets{};
+        VI meets{}, okOf[kMaxSectors];
         for (int i = 0; i < cfg.n; ++i) {
             const int k = cfg.ch[i];
+            okOf[i] = VI{};
             if (!(channels >> k & 1u)) continue;
             const int s1 = cfg.s1[i], s2 = cfg.s2[i];
             VI ok = VI{} - 1;
@@ -613,8 +643,39 @@ class Engine {
             if (s2 < 0) ok &= lo2v <= 0;
             thr = ok ? Max(thr, t.thr[k]) : thr;
             meets |= ok;
+            okOf[i] = ok;
         }
-        return Bits(meets & BoundLanes(t, X0, X1, Y0, Y1, m, thr)) & n.lanes;
+        uint32_t lanes = Bits(meets & BoundLanes(t, X0, X1, Y0, Y1, m, thr)) & n.lanes;
+        if (lanes && plane) {
+            // Per sector, the first-order bound over the part of the cell in its
+            // quadrant from each lane's apex (a box: the cell clipped at the lane's
+            // c1 or c2), with that sector's ratio; a lane is kept where one part passes.
+            const float c1 = 0.5f * float(A0 + A1), c2 = 0.5f * float(B0 + B1);
+            const VF p1 = ToFloat(f.lc1), p2 = ToFloat(f.lc2);
+            VI keep{};
+            for (int i = 0; i < cfg.n; ++i) {
+                if (!(Bits(okOf[i]) & lanes)) continue;
+                const int s1 = cfg.s1[i], s2 = cfg.s2[i];
+                VF lo1 = VF{} + float(A0), hi1 = VF{} + float(A1);
+                VF lo2 = VF{} + float(B0), hi2 = VF{} + float(B1);
+                if (s1 > 0) lo1 = Max(lo1, p1);
+                if (s1 < 0) hi1 = Min(hi1, p1);
+                if (s2 > 0) lo2 = Max(lo2, p2);
+                if (s2 < 0) hi2 = Min(hi2, p2);
+                // Centres and half extents: half-integers, exact in float.
+                const VF m1 = 0.5f * (lo1 + hi1), m2 = 0.5f * (lo2 + hi2);
+                const VF d1 = (m1 - c1) * plane->gx, d2 = (m2 - c2) * plane->gy;
+                const VF q0 = plane->q0 + d1 + d2;
+                const VF q0mag = std::abs(plane->q0) + Max(d1, -d1) + Max(d2, -d2);
+                keep |= okOf[i] &
+                        FirstOrderLanes<cfg.alpha, cfg.beta>(
+                            t, q0, q0mag, plane->gx, plane->gy, m1 + float(a) * m2,
+                            m2 + float(bt) * m1, 0.5f * (hi1 - lo1), 0.5f * (hi2 - lo2),
+                            t.rinv[cfg.ch[i]]);
+            }
+            lanes &= Bits(keep);
+        }
+        return lanes;
     }
 
     /// Every texel of a small rip cell n (at most kLanes texels) that passed RipTest, for
@@ -732,7 +793,7 @@ class Engine {
                           uint16_t(t.valid),
                           0,
                           0};
-                r.lanes = uint16_t(RipTest(t, rip, cfg, f, r));
+                r.lanes = uint16_t(RipTest<L>(t, rip, f, r));
                 if (!r.lanes) continue;
                 if (r.lx + r.ly <= kRipLeaf)
                     RipLeaf(t, rip, cfg, f, r);
@@ -750,7 +811,7 @@ class Engine {
             // keeps the cells along the edges one texel wide, opened 10-15% more cells:
             // each lane's own sign test above already keeps a straddling cell from the
             // lanes and sectors it cannot meet.)
-            const bool split1 = n.ly == 0 || (n.lx > 0 && n.lx >= n.ly);
+            const bool split1 = RipSplitsC1(n.lx, n.ly);
             RipNode c0 = n, c1 = n;
             bool has1, nearFirst0;
             if (split1) {
@@ -771,8 +832,8 @@ class Engine {
             RipNode& nearC = nearFirst0 ? c0 : c1;
             RipNode& farC = nearFirst0 ? c1 : c0;
             if (!has1) c1.lanes = 0;
-            nearC.lanes = nearC.lanes ? uint16_t(RipTest(t, rip, cfg, f, nearC)) : 0;
-            farC.lanes = farC.lanes ? uint16_t(RipTest(t, rip, cfg, f, farC)) : 0;
+            nearC.lanes = nearC.lanes ? uint16_t(RipTest<L>(t, rip, f, nearC)) : 0;
+            farC.lanes = farC.lanes ? uint16_t(RipTest<L>(t, rip, f, farC)) : 0;
             if (nearC.lx + nearC.ly <= kRipLeaf) {  // both halves are leaves
                 if (nearC.lanes) RipLeaf(t, rip, cfg, f, nearC);
                 if (farC.lanes) RipLeaf(t, rip, cfg, f, farC);

@@ -42,6 +42,17 @@ inline constexpr RipLayout kRipLayouts[] = {
 inline constexpr int kNumRipLayouts = int(sizeof(kRipLayouts) / sizeof(kRipLayouts[0]));
 inline constexpr int kRipLayoutAcm4 = 0, kRipLayoutAcm8 = 1;  ///< acm8: 1 to 4
 
+/// Whether the rip-map traversal splits a cell of levels (lx, ly) in c1 (its longer
+/// side; else in c2). From the root (levelsX, levelsY) it visits one chain of levels,
+/// each split once: the rip planes are built for those levels only.
+constexpr bool RipSplitsC1(int lx, int ly) { return ly == 0 || (lx > 0 && lx >= ly); }
+
+/// The rip cells with lower planes: those of the traversal's chain of levels with at
+/// least 2^kRipPlaneLevel texels (smaller ones are tested texel by texel) and at most
+/// 2^-kRipPlaneTopSkip of the map (on larger ones the bound prunes little and costs a
+/// test).
+inline constexpr int kRipPlaneLevel = 4, kRipPlaneTopSkip = 6;
+
 /// Everything a band of tiles reads, prepared once by RunConeSearch.
 struct ConeSearchData {
     const DepthField* field = nullptr;
@@ -52,13 +63,15 @@ struct ConeSearchData {
     std::array<int, 32> levelW{}, levelH{};
     std::array<size_t, 32> levelOff{};
     size_t pyramidSize = 0;  ///< floats per pyramid
-    /// Min-depth pyramids (level 0 = the texels): one, or with `limiting` one per
+    /// With `limiting` only: min-depth pyramids (level 0 = the texels), one per
     /// direction class, holding the depth of the texels limiting for that class (+inf
-    /// elsewhere), back to back.
+    /// elsewhere), back to back. (The other quadtree searches keep each cell's least
+    /// depth in `planes`.)
     std::vector<float> pyramids;
     /// A lower plane of a quadtree cell: every texel t of the cell (unwrapped box
     /// [X0, X1] x [Y0, Y1], centre c) has depth >= q0 + gx (t.x - c.x) + gy (t.y - c.y);
-    /// and the cell's least depth (its value in `pyramids`).
+    /// and the cell's least depth. A rip cell's plane is the same in its sheared
+    /// coordinates: gx, gy are the slopes in c1 and c2.
     struct LowerPlane {
         float q0, gx, gy, least;
     };
@@ -80,6 +93,17 @@ struct ConeSearchData {
         std::vector<size_t> offset;       ///< per (lx, ly): lx * (levelsY + 1) + ly
         /// The cells, level after level (RunConeSearch's buffer, shared by the passes).
         const float* mins = nullptr;
+        /// Lower planes (and least depths) of the cells that have them (kRipPlaneLevel),
+        /// level after level; planeOffset per (lx, ly) as `offset`, kNoPlanes for the
+        /// levels without.
+        static constexpr size_t kNoPlanes = ~size_t(0);
+        const LowerPlane* planes = nullptr;
+        std::vector<size_t> planeOffset;
+        const LowerPlane* PlaneAt(int lx, int ly, int cx, int cy) const {
+            const size_t o = planeOffset[size_t(lx) * size_t(levelsY + 1) + size_t(ly)];
+            if (o == kNoPlanes) return nullptr;
+            return planes + o + size_t(cy) * size_t(cellsX[size_t(lx)]) + size_t(cx);
+        }
         float At(int lx, int ly, int cx, int cy) const {
             return mins[offset[size_t(lx) * size_t(levelsY + 1) + size_t(ly)] +
                         size_t(cy) * size_t(cellsX[size_t(lx)]) + size_t(cx)];

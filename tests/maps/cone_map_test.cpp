@@ -139,15 +139,16 @@ TEST(ConeMap, SmoothMapsMatchBruteForce) {
     for (auto [w, h] : {std::pair{64, 64}, std::pair{48, 30}})
         for (const DepthField& hf : SmoothFields(w, h))
             for (ConeKind k : {ConeKind::Cone, ConeKind::Quad, ConeKind::ConeNormal,
-                               ConeKind::Stacked})
+                               ConeKind::Stacked, ConeKind::Acm4, ConeKind::Acm8})
                 ExpectBitEqual(GenerateConeMap(hf, k), GenerateConeMapBruteForce(hf, k),
                                hf.name + " " + std::to_string(w) + "x" +
                                    std::to_string(h) + " " + std::string(ToString(k)));
 }
 
 TEST(ConeMap, NonSquareAndOddSizesMatchBruteForce) {
-    for (auto [w, h] : {std::pair{24, 40}, std::pair{33, 17}, std::pair{1, 9},
-                        std::pair{5, 5}, std::pair{37, 37}}) {
+    for (auto [w, h] :
+         {std::pair{24, 40}, std::pair{33, 17}, std::pair{1, 9}, std::pair{5, 5},
+          std::pair{37, 37}, std::pair{1, 1}, std::pair{2, 1}}) {
         const DepthField hf = RandomField(w, h, 3, true);
         for (ConeKind k :
              {ConeKind::Cone, ConeKind::Acm8, ConeKind::Quad, ConeKind::RelaxedExact})
@@ -167,7 +168,7 @@ TEST(ConeMap, LaneSearchOnLargeAndWideMapsMatchesPlainSearch) {
     // geometry (and acm8 on non-square maps, which has no sheared rip-maps).
     for (auto [w, h] : {std::pair{301, 38}, std::pair{97, 130}, std::pair{192, 192}}) {
         for (const DepthField& hf : {QuantizeToUnorm8(MakeBuiltinMap("shapes", w, h)),
-                                     RandomField(w, h, 13, true)})
+                                     RandomField(w, h, 13, true), SmoothFields(w, h)[3]})
             for (ConeKind k :
                  {ConeKind::Cone, ConeKind::Quad, ConeKind::Acm4, ConeKind::Acm8})
                 ExpectBitEqual(GenerateConeMap(hf, k),
