@@ -405,8 +405,8 @@ class Engine {
     /// real offsets are (c1 + Alpha c2, c2 + Beta c1) (the quadtree: Alpha = Beta = 0; a
     /// rip cell: its shear), with real centre (cx, cy) and lower plane `p` in (c1, c2).
     /// With v = c - s and the map's metric, Cauchy-Schwarz gives |t - s| >= <t - s, v> /
-    /// |v|, and the plane gives d_t >= q0 + g (t - c); so over the cell, d_t + |t - s| / R
-    /// is at least q0 + |v| / R - sum_i |g_i + <e_i, w v> / (|v| R)| h_i (e_i: the real
+    /// |v|, and the plane gives d_t >= q0 + g (t - c); so over the cell, d_t + |t - s| /
+    /// R is at least q0 + |v| / R - sum_i |g_i + <e_i, w v> / (|v| R)| h_i (e_i: the real
     /// offset of a unit step in c_i). Multiplied by |v| (no division), a lane is skipped
     /// where that is >= a by more than 2^-16 of the terms' magnitudes before any
     /// cancellation, and only where |v| > 0.
@@ -667,11 +667,11 @@ class Engine {
                 const VF d1 = (m1 - c1) * plane->gx, d2 = (m2 - c2) * plane->gy;
                 const VF q0 = plane->q0 + d1 + d2;
                 const VF q0mag = std::abs(plane->q0) + Max(d1, -d1) + Max(d2, -d2);
-                keep |= okOf[i] &
-                        FirstOrderLanes<cfg.alpha, cfg.beta>(
-                            t, q0, q0mag, plane->gx, plane->gy, m1 + float(a) * m2,
-                            m2 + float(bt) * m1, 0.5f * (hi1 - lo1), 0.5f * (hi2 - lo2),
-                            t.rinv[cfg.ch[i]]);
+                keep |=
+                    okOf[i] & FirstOrderLanes<cfg.alpha, cfg.beta>(
+                                  t, q0, q0mag, plane->gx, plane->gy, m1 + float(a) * m2,
+                                  m2 + float(bt) * m1, 0.5f * (hi1 - lo1),
+                                  0.5f * (hi2 - lo2), t.rinv[cfg.ch[i]]);
             }
             lanes &= Bits(keep);
         }
