@@ -625,8 +625,8 @@ class Engine {
         const ConeSearchData::LowerPlane* plane = rip.PlaneAt(n.lx, n.ly, n.cx, n.cy);
         const float m = plane ? plane->least : rip.At(n.lx, n.ly, n.cx, n.cy);
         // Per lane, the largest threshold of the channels whose quadrant the cell
-        // meets (the same sign test as above, with the lane's own offsets), and their
-        // smallest 1 / sqrt(threshold).
+        // meets (the same sign test as above, with the lane's own offsets), and for
+        // each sector the lanes that meet it.
         const VI lo1v = A0 - f.lc1, hi1v = A1 - f.lc1, lo2v = B0 - f.lc2,
                  hi2v = B1 - f.lc2;
         VF thr = VF{} - INFINITY;
@@ -663,15 +663,15 @@ class Engine {
                 if (s2 > 0) lo2 = Max(lo2, p2);
                 if (s2 < 0) hi2 = Min(hi2, p2);
                 // Centres and half extents: half-integers, exact in float.
-                const VF m1 = 0.5f * (lo1 + hi1), m2 = 0.5f * (lo2 + hi2);
-                const VF d1 = (m1 - c1) * plane->gx, d2 = (m2 - c2) * plane->gy;
+                const VF mid1 = 0.5f * (lo1 + hi1), mid2 = 0.5f * (lo2 + hi2);
+                const VF d1 = (mid1 - c1) * plane->gx, d2 = (mid2 - c2) * plane->gy;
                 const VF q0 = plane->q0 + d1 + d2;
                 const VF q0mag = std::abs(plane->q0) + Max(d1, -d1) + Max(d2, -d2);
-                keep |=
-                    okOf[i] & FirstOrderLanes<cfg.alpha, cfg.beta>(
-                                  t, q0, q0mag, plane->gx, plane->gy, m1 + float(a) * m2,
-                                  m2 + float(bt) * m1, 0.5f * (hi1 - lo1),
-                                  0.5f * (hi2 - lo2), t.rinv[cfg.ch[i]]);
+                keep |= okOf[i] & FirstOrderLanes<cfg.alpha, cfg.beta>(
+                                      t, q0, q0mag, plane->gx, plane->gy,
+                                      mid1 + float(a) * mid2, mid2 + float(bt) * mid1,
+                                      0.5f * (hi1 - lo1), 0.5f * (hi2 - lo2),
+                                      t.rinv[cfg.ch[i]]);
             }
             lanes &= Bits(keep);
         }
