@@ -149,6 +149,9 @@ ConeSearchData::LowerPlane CombinePlanes(const PlaneChild* ch, int n) {
 double CellLo(int c, int k) { return double(c << k); }
 double CellHi(int c, int k, int n) { return double(std::min((c + 1) << k, n) - 1); }
 
+/// A texel at (x, y) of depth b as a child for CombinePlanes.
+PlaneChild TexelChild(double x, double y, float b) { return {x, x, y, y, b, 0.0, 0.0, b}; }
+
 /// A cell's child for CombinePlanes from its plane and box.
 PlaneChild ChildOf(const ConeSearchData::LowerPlane& p, double x0, double x1, double y0,
                    double y1) {
@@ -179,9 +182,9 @@ void BuildLowerPlanes(ConeSearchData& d, const float* depth) {
                     if (src) {
                         ch[n++] = ChildOf(src[size_t(cj) * size_t(pw) + size_t(ci)], x0,
                                           x1, y0, y1);
-                    } else {
-                        const float b = depth[size_t(cj) * size_t(W) + size_t(ci)];
-                        ch[n++] = {x0, x1, y0, y1, b, 0.0, 0.0, b};
+                    } else {  // level 0: texels (x0 = x1, y0 = y1)
+                        ch[n++] =
+                            TexelChild(x0, y0, depth[size_t(cj) * size_t(W) + size_t(ci)]);
                     }
                 }
             return CombinePlanes(ch, n);
@@ -237,11 +240,9 @@ void BuildRipPlanes(ConeSearchData::RipMap& rip, int W, int H,
             int n = 0;
             if (fromTexels) {
                 for (int c2 = j << ly; c2 < std::min((j + 1) << ly, H); ++c2)
-                    for (int c1 = i << lx; c1 < std::min((i + 1) << lx, W); ++c1) {
-                        const float b = texels[size_t(c2) * size_t(W) + size_t(c1)];
-                        ch[n++] = {double(c1), double(c1), double(c2), double(c2),
-                                   b,          0.0,        0.0,        b};
-                    }
+                    for (int c1 = i << lx; c1 < std::min((i + 1) << lx, W); ++c1)
+                        ch[n++] = TexelChild(c1, c2,
+                                             texels[size_t(c2) * size_t(W) + size_t(c1)]);
                 return CombinePlanes(ch, n);
             }
             const int kx = chain[k + 1].lx, ky = chain[k + 1].ly;

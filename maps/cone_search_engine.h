@@ -111,6 +111,30 @@ constexpr float kTiny = 0x1p-40f;
 /// evaluation is a few 2^-24 of them).
 constexpr float kFirstOrderSlack = 0x1p-16f;
 
+/// Whether the box of offsets [lo1, hi1] x [lo2, hi2] meets the closed quadrant of signs
+/// (s1, s2) (0: either sign), a rip-map sector in its sheared coordinates: a bool for
+/// ints, a lane mask for vectors (a point: lo = hi).
+template <class T>
+RS_INLINE auto MeetsQuadrant(int s1, int s2, const T& lo1, const T& hi1, const T& lo2,
+                             const T& hi2) {
+    auto ok = (T{} + 0) == 0;  // true: bool, or every lane set
+    if (s1 > 0) ok = ok & (hi1 >= 0);
+    if (s1 < 0) ok = ok & (lo1 <= 0);
+    if (s2 > 0) ok = ok & (hi2 >= 0);
+    if (s2 < 0) ok = ok & (lo2 <= 0);
+    return ok;
+}
+
+/// Per lane, the box [lo1, hi1] x [lo2, hi2] clipped to the closed quadrant of signs
+/// (s1, s2) about the lane's point (p1, p2).
+RS_INLINE void ClipToQuadrant(int s1, int s2, const VF& p1, const VF& p2, VF& lo1, VF& hi1,
+                              VF& lo2, VF& hi2) {
+    if (s1 > 0) lo1 = Max(lo1, p1);
+    if (s1 < 0) hi1 = Min(hi1, p1);
+    if (s2 > 0) lo2 = Max(lo2, p2);
+    if (s2 < 0) hi2 = Min(hi2, p2);
+}
+
 /// 0, 1, ..., kLanes - 1.
 const VI kIota = [] {
     VI v{};
@@ -610,10 +634,8 @@ class Engine {
         for (int i = 0; i < cfg.n; ++i) {
             const int k = cfg.ch[i];
             // Quadrant of channel k in (c1, c2): signs from the table of the kind.
-            const int s1 = cfg.s1[i], s2 = cfg.s2[i];
-            const bool ok1 = s1 > 0 ? hi1 >= 0 : (s1 < 0 ? lo1 <= 0 : true);
-            const bool ok2 = s2 > 0 ? hi2 >= 0 : (s2 < 0 ? lo2 <= 0 : true);
-            if (ok1 && ok2) channels |= 1u << k;
+            if (MeetsQuadrant(cfg.s1[i], cfg.s2[i], lo1, hi1, lo2, hi2))
+                channels |= 1u << k;
         }
         if (!channels) return 0;
         // The real bounding box of the cell.
@@ -635,12 +657,7 @@ class Engine {
             const int k = cfg.ch[i];
             okOf[i] = VI{};
             if (!(channels >> k & 1u)) continue;
-            const int s1 = cfg.s1[i], s2 = cfg.s2[i];
-            VI ok = VI{} - 1;
-            if (s1 > 0) ok &= hi1v >= 0;
-            if (s1 < 0) ok &= lo1v <= 0;
-            if (s2 > 0) ok &= hi2v >= 0;
-            if (s2 < 0) ok &= lo2v <= 0;
+            const VI ok = MeetsQuadrant(cfg.s1[i], cfg.s2[i], lo1v, hi1v, lo2v, hi2v);
             thr = ok ? Max(thr, t.thr[k]) : thr;
             meets |= ok;
             okOf[i] = ok;
@@ -655,13 +672,9 @@ class Engine {
             VI keep{};
             for (int i = 0; i < cfg.n; ++i) {
                 if (!(Bits(okOf[i]) & lanes)) continue;
-                const int s1 = cfg.s1[i], s2 = cfg.s2[i];
                 VF lo1 = VF{} + float(A0), hi1 = VF{} + float(A1);
                 VF lo2 = VF{} + float(B0), hi2 = VF{} + float(B1);
-                if (s1 > 0) lo1 = Max(lo1, p1);
-                if (s1 < 0) hi1 = Min(hi1, p1);
-                if (s2 > 0) lo2 = Max(lo2, p2);
-                if (s2 < 0) hi2 = Min(hi2, p2);
+                ClipToQuadrant(cfg.s1[i], cfg.s2[i], p1, p2, lo1, hi1, lo2, hi2);
                 // Centres and half extents: half-integers, exact in float.
                 const VF mid1 = 0.5f * (lo1 + hi1), mid2 = 0.5f * (lo2 + hi2);
                 const VF d1 = (mid1 - c1) * plane->gx, d2 = (mid2 - c2) * plane->gy;
@@ -716,12 +729,8 @@ class Engine {
             VI ok[kMaxSectors], any{};
             for (int i = 0; i < cfg.n; ++i) {
                 const int ch = cfg.ch[i];
-                const int s1 = cfg.s1[i], s2 = cfg.s2[i];
-                ok[i] = (tiny | ~(s >= t.thr[ch][k] * d2)) & blocker;
-                if (s1 > 0) ok[i] &= off1 >= 0;
-                if (s1 < 0) ok[i] &= off1 <= 0;
-                if (s2 > 0) ok[i] &= off2 >= 0;
-                if (s2 < 0) ok[i] &= off2 <= 0;
+                ok[i] = (tiny | ~(s >= t.thr[ch][k] * d2)) & blocker &
+                        MeetsQuadrant(cfg.s1[i], cfg.s2[i], off1, off1, off2, off2);
                 any |= ok[i];
             }
             if (!Bits(any)) continue;
