@@ -150,7 +150,9 @@ double CellLo(int c, int k) { return double(c << k); }
 double CellHi(int c, int k, int n) { return double(std::min((c + 1) << k, n) - 1); }
 
 /// A texel at (x, y) of depth b as a child for CombinePlanes.
-PlaneChild TexelChild(double x, double y, float b) { return {x, x, y, y, b, 0.0, 0.0, b}; }
+PlaneChild TexelChild(double x, double y, float b) {
+    return {x, x, y, y, b, 0.0, 0.0, b};
+}
 
 /// A cell's child for CombinePlanes from its plane and box.
 PlaneChild ChildOf(const ConeSearchData::LowerPlane& p, double x0, double x1, double y0,
@@ -183,8 +185,8 @@ void BuildLowerPlanes(ConeSearchData& d, const float* depth) {
                         ch[n++] = ChildOf(src[size_t(cj) * size_t(pw) + size_t(ci)], x0,
                                           x1, y0, y1);
                     } else {  // level 0: texels (x0 = x1, y0 = y1)
-                        ch[n++] =
-                            TexelChild(x0, y0, depth[size_t(cj) * size_t(W) + size_t(ci)]);
+                        ch[n++] = TexelChild(x0, y0,
+                                             depth[size_t(cj) * size_t(W) + size_t(ci)]);
                     }
                 }
             return CombinePlanes(ch, n);

@@ -127,8 +127,8 @@ RS_INLINE auto MeetsQuadrant(int s1, int s2, const T& lo1, const T& hi1, const T
 
 /// Per lane, the box [lo1, hi1] x [lo2, hi2] clipped to the closed quadrant of signs
 /// (s1, s2) about the lane's point (p1, p2).
-RS_INLINE void ClipToQuadrant(int s1, int s2, const VF& p1, const VF& p2, VF& lo1, VF& hi1,
-                              VF& lo2, VF& hi2) {
+RS_INLINE void ClipToQuadrant(int s1, int s2, const VF& p1, const VF& p2, VF& lo1,
+                              VF& hi1, VF& lo2, VF& hi2) {
     if (s1 > 0) lo1 = Max(lo1, p1);
     if (s1 < 0) hi1 = Min(hi1, p1);
     if (s2 > 0) lo2 = Max(lo2, p2);
