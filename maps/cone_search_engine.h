@@ -406,19 +406,20 @@ class Engine {
 
     /// The largest threshold of `channels` per lane.
     static VF Threshold(const Tile& t, uint32_t channels) {
-        VF thr = t.thr[std::countr_zero(channels)];
-        for (uint32_t c = channels & (channels - 1); c; c &= c - 1)
-            thr = Max(thr, t.thr[std::countr_zero(c)]);
-        return thr;
+        return FoldChannels(t.thr, channels, [](VF r, VF o) { return Max(r, o); });
     }
 
     /// The smallest 1 / sqrt(threshold) of `channels` per lane.
     static VF Rinv(const Tile& t, uint32_t channels) {
-        VF r = t.rinv[std::countr_zero(channels)];
-        for (uint32_t c = channels & (channels - 1); c; c &= c - 1) {
-            const VF o = t.rinv[std::countr_zero(c)];
-            r = o < r ? o : r;
-        }
+        return FoldChannels(t.rinv, channels, [](VF r, VF o) { return Min(o, r); });
+    }
+
+    /// v[c] folded lane-wise with `op` over the (non-empty) set `channels`.
+    template <class Op>
+    static VF FoldChannels(const VF* v, uint32_t channels, Op op) {
+        VF r = v[std::countr_zero(channels)];
+        for (uint32_t c = channels & (channels - 1); c; c &= c - 1)
+            r = op(r, v[std::countr_zero(c)]);
         return r;
     }
 
