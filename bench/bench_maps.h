@@ -19,24 +19,8 @@ namespace reliefsim::bench {
 /// `field` resampled bilinearly (repeat) to size x size floats: a map with as many
 /// distinct depths as a 16-bit or float artist's map.
 inline DepthField Upsample(const DepthField& f, int size) {
-    DepthField out;
-    out.width = out.height = size;
+    DepthField out = UpsampleBilinear(f, size, size);
     out.name = f.name + "@" + std::to_string(size);
-    out.depth.resize(size_t(size) * size_t(size));
-    for (int j = 0; j < size; ++j)
-        for (int i = 0; i < size; ++i) {
-            const double x = (i + 0.5) * f.width / size - 0.5,
-                         y = (j + 0.5) * f.height / size - 0.5;
-            const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
-            const double fx = x - x0, fy = y - y0;
-            auto at = [&](int a, int b) {
-                return double(f.At((a % f.width + f.width) % f.width,
-                                   (b % f.height + f.height) % f.height));
-            };
-            out.depth[size_t(j) * size_t(size) + size_t(i)] =
-                float((at(x0, y0) * (1 - fx) + at(x0 + 1, y0) * fx) * (1 - fy) +
-                      (at(x0, y0 + 1) * (1 - fx) + at(x0 + 1, y0 + 1) * fx) * fy);
-        }
     return out;
 }
 

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <sstream>
+#include <string>
 
 #include "core/error.h"
 
@@ -44,6 +45,29 @@ void ValidateDepthField(const DepthField& hf) {
             throw Error(s.str());
         }
     }
+}
+
+DepthField UpsampleBilinear(const DepthField& hf, int width, int height) {
+    DepthField out;
+    out.width = width;
+    out.height = height;
+    out.name = hf.name + "@" + std::to_string(width) + "x" + std::to_string(height);
+    out.depth.resize(size_t(width) * size_t(height));
+    const auto at = [&](int a, int b) {
+        return double(hf.At((a % hf.width + hf.width) % hf.width,
+                            (b % hf.height + hf.height) % hf.height));
+    };
+    for (int j = 0; j < height; ++j)
+        for (int i = 0; i < width; ++i) {
+            const double x = (i + 0.5) * hf.width / width - 0.5,
+                         y = (j + 0.5) * hf.height / height - 0.5;
+            const int x0 = int(std::floor(x)), y0 = int(std::floor(y));
+            const double fx = x - x0, fy = y - y0;
+            out.depth[size_t(j) * size_t(width) + size_t(i)] =
+                float((at(x0, y0) * (1 - fx) + at(x0 + 1, y0) * fx) * (1 - fy) +
+                      (at(x0, y0 + 1) * (1 - fx) + at(x0 + 1, y0 + 1) * fx) * fy);
+        }
+    return out;
 }
 
 }  // namespace reliefsim

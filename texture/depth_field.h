@@ -36,6 +36,11 @@ DepthField DepthFieldFromUnorm8(int width, int height, std::vector<uint8_t> dept
 /// Quantises a float field to 8 bits (round to nearest), keeping depth8.
 DepthField QuantizeToUnorm8(const DepthField& hf);
 
+/// `hf` resampled bilinearly to width x height floats (repeat addressing, texel centres
+/// at (i + 0.5) / width): a smooth map with as many distinct depths as a float map. The
+/// name is hf's with "@WxH" appended.
+DepthField UpsampleBilinear(const DepthField& hf, int width, int height);
+
 /// Throws Error naming hf.name when the field is empty or holds NaN/Inf or values outside
 /// [0,1].
 void ValidateDepthField(const DepthField& hf);

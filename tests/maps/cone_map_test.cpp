@@ -102,32 +102,23 @@ TEST(ConeMap, FastEqualsBruteForceAt128) {
 /// a slanted plane (ties along every row), and a coarse random grid upsampled bilinearly.
 std::vector<DepthField> SmoothFields(int w, int h) {
     std::vector<DepthField> v;
-    DepthField bowl, plane, up;
-    for (DepthField* f : {&bowl, &plane, &up}) {
+    DepthField bowl, plane;
+    for (DepthField* f : {&bowl, &plane}) {
         f->width = w;
         f->height = h;
         f->depth.resize(size_t(w) * size_t(h));
     }
     bowl.name = "bowl";
     plane.name = "slanted plane";
-    up.name = "upsampled random";
-    const DepthField coarse = RandomField(8, 8, 21, false);
     for (int j = 0; j < h; ++j)
         for (int i = 0; i < w; ++i) {
             const double x = (i + 0.5) / w - 0.5, y = (j + 0.5) / h - 0.5;
             const size_t at = size_t(j) * size_t(w) + size_t(i);
             bowl.depth[at] = float(0.9 - 1.6 * (x * x + y * y));
             plane.depth[at] = float(0.1 + 0.8 * (i + 0.5) / w);
-            const double cx = (i + 0.5) * 8.0 / w - 0.5, cy = (j + 0.5) * 8.0 / h - 0.5;
-            const int x0 = int(std::floor(cx)), y0 = int(std::floor(cy));
-            const double fx = cx - x0, fy = cy - y0;
-            const auto c = [&](int a, int b) {
-                return double(coarse.At((a + 8) % 8, (b + 8) % 8));
-            };
-            up.depth[at] =
-                float((c(x0, y0) * (1 - fx) + c(x0 + 1, y0) * fx) * (1 - fy) +
-                      (c(x0, y0 + 1) * (1 - fx) + c(x0 + 1, y0 + 1) * fx) * fy);
         }
+    DepthField up = UpsampleBilinear(RandomField(8, 8, 21, false), w, h);
+    up.name = "upsampled random";
     v.push_back(bowl);
     v.push_back(MakeSinusoidMap(w, h, 0.7f));
     v.push_back(plane);
