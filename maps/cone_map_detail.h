@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/wrap.h"
 #include "maps/cone_map.h"
 
 namespace reliefsim::detail {
@@ -137,10 +138,7 @@ struct SearchWindows {
 /// Fills `out`, reusing its storage.
 void MakeSearchWindows(const DepthField& hf, SearchWindows& out);
 
-inline int Wrap(int i, int n) {
-    int r = i % n;
-    return r < 0 ? r + n : r;
-}
+using reliefsim::Wrap;  // core/wrap.h
 
 /// Validates the field and returns min depth.
 float CheckedMinDepth(const DepthField& hf);

@@ -869,11 +869,15 @@ class Engine {
                 continue;
             }
             if (farC.lanes) push(farC);
-            have = nearC.lanes != 0 && bandOf(nearC) == band;
-            if (have)
-                n = nearC;
-            else if (nearC.lanes)
-                push(nearC);
+            have = false;
+            if (nearC.lanes) {
+                const int nb = bandOf(nearC);
+                have = nb == band;
+                if (have)
+                    n = nearC;
+                else
+                    bands_[size_t(nb)].push_back(nearC);
+            }
         }
     }
 

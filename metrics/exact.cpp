@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "core/error.h"
+#include "core/wrap.h"
 
 namespace reliefsim {
 
@@ -16,11 +17,6 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 int64_t FloorDiv(int64_t a, int64_t b) {  // floor(a / b), b > 0
     const int64_t q = a / b;
     return (a % b != 0 && a < 0) ? q - 1 : q;
-}
-
-int64_t Wrap(int64_t i, int64_t n) {
-    const int64_t r = i % n;
-    return r < 0 ? r + n : r;
 }
 
 /// A cell coordinate as an integer, for any double the walk produces (rays are bounded,
@@ -119,8 +115,8 @@ ExactSurface::ExactSurface(const DepthField& field, WrapMode wrap)
 
 double ExactSurface::Texel(int64_t i, int64_t j) const {
     if (wrap_ == WrapMode::Repeat) {
-        i = Wrap(i, width_);
-        j = Wrap(j, height_);
+        i = Wrap<int64_t>(i, width_);
+        j = Wrap<int64_t>(j, height_);
     } else {
         i = std::clamp<int64_t>(i, 0, width_ - 1);
         j = std::clamp<int64_t>(j, 0, height_ - 1);
@@ -144,8 +140,8 @@ double ExactSurface::DepthAt(double u, double v) const {
 float ExactSurface::BlockMinimum(int level, int64_t bx, int64_t by) const {
     const Level& l = levels_[size_t(level)];
     if (wrap_ == WrapMode::Repeat) {
-        bx = Wrap(bx, l.width);
-        by = Wrap(by, l.height);
+        bx = Wrap<int64_t>(bx, l.width);
+        by = Wrap<int64_t>(by, l.height);
     } else {
         bx = std::clamp<int64_t>(bx, 0, l.width - 1);
         by = std::clamp<int64_t>(by, 0, l.height - 1);

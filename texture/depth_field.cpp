@@ -6,6 +6,7 @@
 #include <string>
 
 #include "core/error.h"
+#include "core/wrap.h"
 
 namespace reliefsim {
 
@@ -54,8 +55,7 @@ DepthField UpsampleBilinear(const DepthField& hf, int width, int height) {
     out.name = hf.name + "@" + std::to_string(width) + "x" + std::to_string(height);
     out.depth.resize(size_t(width) * size_t(height));
     const auto at = [&](int a, int b) {
-        return double(hf.At((a % hf.width + hf.width) % hf.width,
-                            (b % hf.height + hf.height) % hf.height));
+        return double(hf.At(Wrap(a, hf.width), Wrap(b, hf.height)));
     };
     for (int j = 0; j < height; ++j)
         for (int i = 0; i < width; ++i) {

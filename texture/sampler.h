@@ -10,6 +10,7 @@
 
 #include "core/enum_names.h"
 #include "core/error.h"
+#include "core/wrap.h"
 #include "texture/depth_field.h"
 
 namespace reliefsim {
@@ -306,8 +307,7 @@ class Sampler {
     }
     int WrapIndex(int i, int n) const {
         if (state_.wrap == WrapMode::Clamp) return i < 0 ? 0 : (i >= n ? n - 1 : i);
-        int m = i % n;
-        return m < 0 ? m + n : m;
+        return Wrap(i, n);
     }
 
     const DepthField* field_;

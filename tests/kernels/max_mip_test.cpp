@@ -16,6 +16,7 @@
 #include "render/frame.h"
 #include "render/kernel_maps.h"
 #include "render/scene.h"
+#include "tests/common/fields.h"
 #include "tests/kernels/every_width.h"
 #include "texture/cell_pyramid.h"
 #include "texture/procedural.h"
@@ -25,15 +26,7 @@ using namespace reliefsim;
 namespace {
 
 DepthField Field(int w, int h, float (*depth)(int i, int j)) {
-    DepthField f;
-    f.width = w;
-    f.height = h;
-    f.depth.resize(size_t(w) * size_t(h));
-    for (int j = 0; j < h; ++j)
-        for (int i = 0; i < w; ++i)
-            f.depth[size_t(j) * size_t(w) + size_t(i)] = depth(i, j);
-    f.name = "analytic";
-    return f;
+    return reliefsim::testing::MakeField(w, h, depth, "analytic");
 }
 
 RayRun Trace(const char* method, const DepthField& f, const MarchInput& in,

@@ -14,29 +14,25 @@
 #include "core/error.h"
 #include "core/hash.h"
 #include "maps/cone_map_detail.h"
+#include "tests/common/fields.h"
 #include "texture/procedural.h"
 
 namespace reliefsim {
 namespace {
 
 DepthField Field(int w, int h, uint64_t seed, bool smooth) {
-    DepthField hf;
-    hf.width = w;
-    hf.height = h;
-    hf.name = "random";
-    hf.depth.resize(size_t(w) * size_t(h));
-    for (int j = 0; j < h; ++j)
-        for (int i = 0; i < w; ++i) {
+    return testing::MakeField(
+        w, h,
+        [&](int i, int j) {
             const uint64_t r =
                 Mix64(seed * 1000003ull + uint64_t(j) * uint64_t(w) + uint64_t(i));
-            float v = float(r >> 40) * (1.0f / 16777216.0f);
-            if (smooth)
-                v = v < 0.85f ? 0.5f + 0.3f * std::sin(float(i) * 0.7f) *
-                                           std::cos(float(j) * 0.45f)
-                              : 0.5f * v;
-            hf.depth[size_t(j) * size_t(w) + size_t(i)] = v;
-        }
-    return hf;
+            const float v = float(r >> 40) * (1.0f / 16777216.0f);
+            if (!smooth) return v;
+            return v < 0.85f ? 0.5f + 0.3f * std::sin(float(i) * 0.7f) *
+                                          std::cos(float(j) * 0.45f)
+                             : 0.5f * v;
+        },
+        "random");
 }
 
 constexpr ConeKind kKinds[] = {ConeKind::Cone, ConeKind::ConeNormal, ConeKind::Quad,

@@ -17,6 +17,7 @@
 #include "maps/cone_search.h"
 #include "maps/map_cache.h"
 #include "maps/mip_pyramid.h"
+#include "tests/common/fields.h"
 #include "tests/common/test_files.h"
 #include "texture/image_io.h"
 #include "texture/procedural.h"
@@ -26,13 +27,9 @@ namespace reliefsim {
 namespace {
 
 DepthField RandomField(int w, int h, uint64_t seed, bool smooth) {
-    DepthField hf;
-    hf.width = w;
-    hf.height = h;
-    hf.name = "random";
-    hf.depth.resize(size_t(w) * size_t(h));
-    for (int j = 0; j < h; ++j)
-        for (int i = 0; i < w; ++i) {
+    return testing::MakeField(
+        w, h,
+        [&](int i, int j) {
             const uint64_t r =
                 Mix64(seed * 1000003ull + uint64_t(j) * uint64_t(w) + uint64_t(i));
             float v = float(r >> 40) * (1.0f / 16777216.0f);
@@ -42,9 +39,9 @@ DepthField RandomField(int w, int h, uint64_t seed, bool smooth) {
                                : v * 0.5f;
                 v = std::clamp(v, 0.0f, 1.0f);
             }
-            hf.depth[size_t(j) * size_t(w) + size_t(i)] = v;
-        }
-    return hf;
+            return v;
+        },
+        "random");
 }
 
 void ExpectBitEqual(const ConeMap& a, const ConeMap& b, const std::string& what) {

@@ -10,6 +10,7 @@
 #include <random>
 
 #include "core/error.h"
+#include "tests/common/fields.h"
 #include "texture/procedural.h"
 
 using namespace reliefsim;
@@ -17,15 +18,7 @@ using namespace reliefsim;
 namespace {
 
 DepthField Field(int w, int h, auto&& depthAt) {
-    DepthField f;
-    f.width = w;
-    f.height = h;
-    f.name = "test";
-    f.depth.resize(size_t(w) * size_t(h));
-    for (int j = 0; j < h; ++j)
-        for (int i = 0; i < w; ++i)
-            f.depth[size_t(j) * size_t(w) + size_t(i)] = depthAt(i, j);
-    return f;
+    return reliefsim::testing::MakeField(w, h, depthAt);
 }
 
 struct RayCase {

@@ -6,20 +6,14 @@
 
 #include <cmath>
 
+#include "tests/common/fields.h"
 #include "texture/procedural.h"
 
 using namespace reliefsim;
 
 namespace {
 
-DepthField Make(int w, int h, std::vector<float> v) {
-    DepthField f;
-    f.width = w;
-    f.height = h;
-    f.depth = std::move(v);
-    f.name = "test";
-    return f;
-}
+using reliefsim::testing::MakeField;
 
 // Exact double-precision GL-spec bilinear, for comparison.
 double ExactBilinear(const DepthField& f, double u, double v, WrapMode wrap) {
@@ -51,7 +45,7 @@ double ExactBilinear(const DepthField& f, double u, double v, WrapMode wrap) {
 }  // namespace
 
 TEST(Sampler, NearestReturnsTexelAtCentres) {
-    DepthField f = Make(2, 2, {0.0f, 1.0f, 0.25f, 0.75f});
+    DepthField f = MakeField(2, 2, {0.0f, 1.0f, 0.25f, 0.75f});
     Sampler<false> s(f, {Filter::Nearest, WrapMode::Repeat});
     EXPECT_EQ(s.Sample({0.25f, 0.25f}), 0.0f);
     EXPECT_EQ(s.Sample({0.75f, 0.25f}), 1.0f);
@@ -61,7 +55,7 @@ TEST(Sampler, NearestReturnsTexelAtCentres) {
 }
 
 TEST(Sampler, NearestClampHoldsEdgeTexels) {
-    DepthField f = Make(2, 2, {0.0f, 1.0f, 0.25f, 0.75f});
+    DepthField f = MakeField(2, 2, {0.0f, 1.0f, 0.25f, 0.75f});
     Sampler<false> s(f, {Filter::Nearest, WrapMode::Clamp});
     EXPECT_EQ(s.Sample({-3.0f, 0.1f}), 0.0f);
     EXPECT_EQ(s.Sample({7.0f, 0.1f}), 1.0f);
@@ -69,7 +63,7 @@ TEST(Sampler, NearestClampHoldsEdgeTexels) {
 }
 
 TEST(Sampler, BilinearAtCentreIsMeanOfFour) {
-    DepthField f = Make(2, 2, {0.0f, 1.0f, 0.25f, 0.75f});
+    DepthField f = MakeField(2, 2, {0.0f, 1.0f, 0.25f, 0.75f});
     Sampler<false> s(f, {Filter::Bilinear, WrapMode::Clamp});
     EXPECT_FLOAT_EQ(s.Sample({0.5f, 0.5f}), 0.5f);
     EXPECT_EQ(s.Sample({0.25f, 0.25f}), 0.0f);       // texel centre: weight 0
@@ -77,7 +71,7 @@ TEST(Sampler, BilinearAtCentreIsMeanOfFour) {
 }
 
 TEST(Sampler, BilinearRepeatBlendsAcrossTheSeam) {
-    DepthField f = Make(2, 1, {0.0f, 1.0f});
+    DepthField f = MakeField(2, 1, {0.0f, 1.0f});
     Sampler<false> rep(f, {Filter::Bilinear, WrapMode::Repeat});
     Sampler<false> clamp(f, {Filter::Bilinear, WrapMode::Clamp});
     EXPECT_FLOAT_EQ(rep.Sample({0.0f, 0.5f}),
@@ -87,7 +81,7 @@ TEST(Sampler, BilinearRepeatBlendsAcrossTheSeam) {
 }
 
 TEST(Sampler, BilinearRepeatNonPowerOfTwo) {
-    DepthField f = Make(3, 1, {0.0f, 0.5f, 1.0f});
+    DepthField f = MakeField(3, 1, {0.0f, 0.5f, 1.0f});
     Sampler<false> s(f, {Filter::Bilinear, WrapMode::Repeat});
     EXPECT_FLOAT_EQ(s.Sample({0.0f, 0.5f}),
                     0.5f);  // between texel 2 (1.0) and texel 0 (0.0)
@@ -114,7 +108,7 @@ TEST(Sampler, BilinearCloseToExactReference) {
 }
 
 TEST(Sampler, Min4IsMinimumOfFootprint) {
-    DepthField f = Make(2, 2, {0.4f, 0.9f, 0.2f, 0.6f});
+    DepthField f = MakeField(2, 2, {0.4f, 0.9f, 0.2f, 0.6f});
     Sampler<false> s(f, {Filter::Min4, WrapMode::Clamp});
     EXPECT_EQ(s.Sample({0.5f, 0.5f}), 0.2f);
     EXPECT_EQ(s.Sample({0.25f, 0.25f}), 0.4f);  // on a centre: zero-weight texels ignored
@@ -124,7 +118,7 @@ TEST(Sampler, Min4IsMinimumOfFootprint) {
 }
 
 TEST(Sampler, CountsFetchesAndTexelReads) {
-    DepthField f = Make(4, 4, std::vector<float>(16, 0.5f));
+    DepthField f = MakeField(4, 4, std::vector<float>(16, 0.5f));
     FetchCounts c;
     Sampler<true> bil(f, {Filter::Bilinear, WrapMode::Repeat}, &c);
     bil.Sample({0.3f, 0.3f});
@@ -145,7 +139,7 @@ TEST(Sampler, CountsFetchesAndTexelReads) {
 }
 
 TEST(Sampler, TexelFetchWrapsOrClamps) {
-    DepthField f = Make(3, 1, {0.1f, 0.2f, 0.3f});
+    DepthField f = MakeField(3, 1, {0.1f, 0.2f, 0.3f});
     Sampler<false> rep(f, {Filter::Nearest, WrapMode::Repeat});
     Sampler<false> clamp(f, {Filter::Nearest, WrapMode::Clamp});
     EXPECT_EQ(rep.TexelFetch({-1, 0}), 0.3f);
@@ -164,7 +158,7 @@ TEST(Sampler, NearestUsesFloatProductForTexelSelection) {
     for (int n : {3, 5, 7, 11, 13, 25, 100, 255}) {
         std::vector<float> depth(static_cast<size_t>(n));
         for (int i = 0; i < n; ++i) depth[size_t(i)] = float(i);
-        DepthField f = Make(n, 1, depth);
+        DepthField f = MakeField(n, 1, depth);
         for (WrapMode wrap : {WrapMode::Clamp, WrapMode::Repeat}) {
             Sampler<false> s(f, {Filter::Nearest, wrap});
             for (int k = 1; k < n; ++k) {
@@ -188,7 +182,7 @@ TEST(Sampler, NearestUsesFloatProductForTexelSelection) {
     const float u11 = 7.0f / 11.0f;
     ASSERT_EQ(std::floor(u11 * 11.0f), 7.0f);
     ASSERT_EQ(std::floor(double(u11) * 11.0), 6.0);
-    DepthField f11 = Make(11, 1, {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10});
+    DepthField f11 = MakeField(11, 1, {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10});
     for (WrapMode wrap : {WrapMode::Clamp, WrapMode::Repeat}) {
         Sampler<false> s11(f11, {Filter::Nearest, wrap});
         EXPECT_EQ(s11.Sample({u11, 0.5f}), 7.0f);
@@ -197,7 +191,7 @@ TEST(Sampler, NearestUsesFloatProductForTexelSelection) {
 }
 
 TEST(Sampler, HugeCoordinatesStayInRange) {
-    DepthField f = Make(4, 3, std::vector<float>(12, 0.25f));
+    DepthField f = MakeField(4, 3, std::vector<float>(12, 0.25f));
     for (Filter filter : {Filter::Nearest, Filter::Bilinear, Filter::Min4})
         for (WrapMode wrap : {WrapMode::Repeat, WrapMode::Clamp}) {
             Sampler<false> s(f, {filter, wrap});
