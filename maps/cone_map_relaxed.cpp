@@ -71,10 +71,14 @@ RS_INLINE float ListingStep(float v, int steps, float inv) {
 /// The listing's float arithmetic for one pair, given the source position (sx, sy), the
 /// destination (dstx, dsty) and its sampled depth dstz. `inv` = 1/steps when steps is a
 /// power of two (then v * inv == v / steps exactly: scaling by a power of two), else 0
-/// (divide).
+/// (divide). `clear` (uv, 0 when unknown; used only when best < +inf): a march point
+/// nearer the destination than this, along the float step, provably samples a cell no
+/// deeper than the march's z after its first step (the exit field, ExitField), so the
+/// march does not sample there (docs/cone_maps.md, section "Early outs inside the
+/// march").
 RS_INLINE float ListingRatio(const DepthField& hf, float sx, float sy, float dstx,
                              float dsty, float dstz, int steps, float inv, float apex,
-                             float best) {
+                             float best, double clear = 0) {
     if (!(dstz > 0.0f)) return kInfF;  // NaN in the listing
     const float src = apex;
     // Exit point deeper than the apex: the march only goes deeper (step z >= 0), ratio 1.
@@ -98,8 +102,25 @@ RS_INLINE float ListingRatio(const DepthField& hf, float sx, float sy, float dst
                 stz = ListingStep(vz, steps, inv);
     float px = dstx + stx, py = dsty + sty, pz = dstz + stz;
     if (pz >= src) return 1.0f;
+    int i = 1;
+    if (prune && clear > 0) {
+        // Samples k = 1..k0 with k |step| < clear continue the march: only their sums.
+        const double step2 = double(stx) * double(stx) + double(sty) * double(sty);
+        if (step2 > 0) {
+            const double k = std::floor(clear / std::sqrt(step2));
+            int k0 = k < double(steps) ? int(k) : steps - 1;
+            while (k0 > 0 && double(k0) * double(k0) * step2 >= clear * clear) --k0;
+            k0 = std::min(k0, steps - 1);
+            for (; i <= k0; ++i) {
+                px += stx;
+                py += sty;
+                pz += stz;
+            }
+            if (pz >= src) return 1.0f;
+        }
+    }
     const double best2 = double(best) * double(best) * (1.0 + 0x1p-20);
-    for (int i = 1; i < steps; ++i) {
+    for (; i < steps; ++i) {
         if (NearestWrap(hf, px, py) <= pz) {
             px += stx;
             py += sty;
@@ -242,12 +263,14 @@ SectorBits RectSectorMask(double x0, double x1, double y0, double y1) {
 /// The exit-field search window: offsets in [-R, R]^2 (unwrapped, texel units) in 8x8
 /// tiles sorted by their smallest dilated distance.
 struct ExitOffset {
-    int dx, dy;
     float dist;  ///< uv distance from the centre to the eps-dilated cell, rounded down
     SectorBits mask;
 };
+/// An 8x8 tile of the window: offsets[begin + 8 * ly + lx] is (ox + lx, oy + ly), a slot
+/// of `valid` (the offsets outside the window and (0, 0) are empty slots).
 struct ExitTile {
-    int begin, end, ox, oy;
+    int begin, ox, oy;
+    uint64_t valid;
     float minDist;
     SectorBits mask;
 };
@@ -263,6 +286,8 @@ struct ExitSuper {
 };
 struct ExitWindow {
     std::vector<ExitOffset> offs;
+    /// Per tile (block begin / 64) and sector: the slots whose mask holds the sector.
+    std::vector<uint64_t> sectorSlots;
     std::vector<ExitTile> tiles;
     std::vector<ExitSuper> supers;
 };
@@ -275,7 +300,11 @@ ExitWindow MakeExitWindow(int W, int H, int Rx, int Ry, double e) {
             ExitSuper st{int(win.tiles.size()), 0, sx, sy, kInfF, 0};
             for (int oy = sy; oy < std::min(sy + kSuper, Ry + 1); oy += kTile)
                 for (int ox = sx; ox < std::min(sx + kSuper, Rx + 1); ox += kTile) {
-                    ExitTile t{int(offs.size()), 0, ox, oy, kInfF, 0};
+                    ExitTile t{int(offs.size()), ox, oy, 0, kInfF, 0};
+                    offs.resize(offs.size() + kTile * kTile, ExitOffset{kInfF, 0});
+                    win.sectorSlots.resize(offs.size() / (kTile * kTile) * kSectors, 0);
+                    uint64_t* slotsOf =
+                        &win.sectorSlots[win.sectorSlots.size() - kSectors];
                     for (int dy = oy; dy < std::min(oy + kTile, Ry + 1); ++dy)
                         for (int dx = ox; dx < std::min(ox + kTile, Rx + 1); ++dx) {
                             if (dx == 0 && dy == 0) continue;
@@ -284,16 +313,22 @@ ExitWindow MakeExitWindow(int W, int H, int Rx, int Ry, double e) {
                             const double ax = std::max({0.0, x0, -x1}),
                                          ay = std::max({0.0, y0, -y1});
                             const ExitOffset o{
-                                dx, dy,
                                 NonNegFloatAtMost(std::sqrt(ax * ax + ay * ay) *
                                                   (1 - 1e-12)),
                                 RectSectorMask(x0, x1, y0, y1)};
-                            offs.push_back(o);
+                            const int slot = (dy - oy) * kTile + (dx - ox);
+                            offs[size_t(t.begin + slot)] = o;
+                            t.valid |= uint64_t(1) << slot;
+                            for (unsigned m = o.mask; m; m &= m - 1)
+                                slotsOf[std::countr_zero(m)] |= uint64_t(1) << slot;
                             t.minDist = std::min(t.minDist, o.dist);
                             t.mask |= o.mask;
                         }
-                    t.end = int(offs.size());
-                    if (t.end == t.begin) continue;
+                    if (!t.valid) {
+                        offs.resize(size_t(t.begin));
+                        win.sectorSlots.resize(win.sectorSlots.size() - kSectors);
+                        continue;
+                    }
                     win.tiles.push_back(t);
                     st.minDist = std::min(st.minDist, t.minDist);
                     st.mask |= t.mask;
@@ -348,13 +383,31 @@ void ExitDistancesOfTexel(const DepthField& hf, const ExitWindow& win,
             if (!open) continue;
             const int wy = WrapFast(j + t.oy, H), wx = WrapFast(i + t.ox, W);
             if (!(max8[size_t(wy) * size_t(W) + size_t(wx)] > d)) continue;
+            // The slots in an open sector, and of those the cells deeper than d, one bit
+            // per slot, a row at a time.
+            const uint64_t* slotsOf =
+                &win.sectorSlots[size_t(t.begin / (kTile * kTile)) * kSectors];
+            uint64_t wanted = 0;
+            for (unsigned m = open; m; m &= m - 1) wanted |= slotsOf[std::countr_zero(m)];
+            uint64_t deeper = 0;
+            for (int a = 0; a < kTile; ++a) {
+                const unsigned rowWanted = unsigned(wanted >> (kTile * a)) & 0xFFu;
+                if (!rowWanted) continue;
+                const float* row = &hf.depth[size_t(WrapFast(wy + a, H)) * size_t(W)];
+                unsigned bits = 0;
+                if (wx + kTile <= W) {
+                    for (int b = 0; b < kTile; ++b)
+                        bits |= unsigned(row[wx + b] > d) << b;
+                } else {
+                    for (int b = 0; b < kTile; ++b)
+                        bits |= unsigned(row[WrapFast(wx + b, W)] > d) << b;
+                }
+                deeper |= uint64_t(bits & rowWanted) << (kTile * a);
+            }
             bool changed = false;
-            for (int o = t.begin; o < t.end; ++o) {
-                const ExitOffset& off = win.offs[size_t(o)];
-                if (!(off.mask & open)) continue;
-                const int y = WrapFast(wy + (off.dy - t.oy), H),
-                          xx = WrapFast(wx + (off.dx - t.ox), W);
-                if (!(hf.depth[size_t(y) * size_t(W) + size_t(xx)] > d)) continue;
+            for (; deeper; deeper &= deeper - 1) {
+                const ExitOffset& off =
+                    win.offs[size_t(t.begin + std::countr_zero(deeper))];
                 changed |= LowerMasked(unsigned(off.mask), off.dist, L);
             }
             if (changed) worst = *std::max_element(L, L + kSectors);
@@ -659,9 +712,10 @@ struct RelaxedSearch {
           halfX(halfX) {}
 
     /// The listing's ratio of one pair; lowers the running minimum.
-    RS_INLINE void Consider(int dx, int dy, float fdx, float fdy, float b) {
-        const float r =
-            ListingRatio(hf, sx, sy, sx + fdx, sy + fdy, b, steps, inv, apex, rb.best);
+    RS_INLINE void Consider(int dx, int dy, float fdx, float fdy, float b,
+                            double clear = 0) {
+        const float r = ListingRatio(hf, sx, sy, sx + fdx, sy + fdy, b, steps, inv, apex,
+                                     rb.best, clear);
         if (rb.best > r) {
             rb.best = r;
             rb.argDx = dx;
@@ -693,8 +747,10 @@ struct RelaxedSearch {
     /// The same for one offset whose destination texel `dst` has depth b. The listing
     /// samples exactly this texel as the destination (its float texel coordinate is
     /// within W * 2^-22 < 1/2 of the centre), so the bounds with its depth hold for the
-    /// pair.
-    RS_INLINE bool OffsetPrunes(const RelaxedOffset& off, size_t dst, float b) const {
+    /// pair. When it keeps the pair, `clear` is the exit field's value for it (0 without
+    /// the field): ListingRatio's `clear`.
+    RS_INLINE bool OffsetPrunes(const RelaxedOffset& off, size_t dst, float b,
+                                double& clear) const {
         const double db = double(b);
         if (!(b < apex) || double(off.distLo) >= double(rb.best) * (dApex - db))
             return true;
@@ -708,6 +764,8 @@ struct RelaxedSearch {
             if (ExitBoundPrunes(ef, double(off.dist), double(off.invD), db, double(lp),
                                 dApex, double(rb.best), stepLo))
                 return true;
+            // (1 - 2^-40: the double roundings of ListingRatio's comparison of squares.)
+            clear = double(lp) * (1.0 - 0x1p-40);
         }
         return false;
     }
@@ -730,8 +788,9 @@ struct RelaxedSearch {
                 const RelaxedOffset& off = groups.offs[size_t(o)];
                 const size_t dst = rowBase[off.ly] + size_t(col[off.lx]);
                 const float b = hf.depth[dst];
-                if (OffsetPrunes(off, dst, b)) continue;
-                Consider(off.dx, off.dy, off.fdx, off.fdy, b);
+                double clear = 0;
+                if (OffsetPrunes(off, dst, b, clear)) continue;
+                Consider(off.dx, off.dy, off.fdx, off.fdy, b, clear);
             }
         }
     }
