@@ -26,8 +26,8 @@ inline DepthField MakeField(int w, int h, std::vector<float> depth,
 /// A w x h field named `name` whose texel (i, j) has depth depthAt(i, j), called row by
 /// row (j outer, i inner: a random generator gives the same field every time).
 template <class DepthAt>
-    requires std::invocable<DepthAt&, int, int>
-DepthField MakeField(int w, int h, DepthAt&& depthAt, std::string name = "test") {
+requires std::invocable<DepthAt&, int, int> DepthField
+MakeField(int w, int h, DepthAt&& depthAt, std::string name = "test") {
     std::vector<float> depth(size_t(w) * size_t(h));
     for (int j = 0; j < h; ++j)
         for (int i = 0; i < w; ++i)
