@@ -110,7 +110,6 @@ RS_INLINE float ListingRatio(const DepthField& hf, float sx, float sy, float dst
             const double k = std::floor(clear / std::sqrt(step2));
             int k0 = k < double(steps) ? int(k) : steps - 1;
             while (k0 > 0 && double(k0) * double(k0) * step2 >= clear * clear) --k0;
-            k0 = std::min(k0, steps - 1);
             for (; i <= k0; ++i) {
                 px += stx;
                 py += sty;
@@ -266,11 +265,10 @@ struct ExitOffset {
     float dist;  ///< uv distance from the centre to the eps-dilated cell, rounded down
     SectorBits mask;
 };
-/// An 8x8 tile of the window: offsets[begin + 8 * ly + lx] is (ox + lx, oy + ly), a slot
-/// of `valid` (the offsets outside the window and (0, 0) are empty slots).
+/// An 8x8 tile of the window: offsets[begin + 8 * ly + lx] is (ox + lx, oy + ly) (the
+/// offsets outside the window and (0, 0) are empty slots, in no sector's mask).
 struct ExitTile {
     int begin, ox, oy;
-    uint64_t valid;
     float minDist;
     SectorBits mask;
 };
@@ -300,7 +298,8 @@ ExitWindow MakeExitWindow(int W, int H, int Rx, int Ry, double e) {
             ExitSuper st{int(win.tiles.size()), 0, sx, sy, kInfF, 0};
             for (int oy = sy; oy < std::min(sy + kSuper, Ry + 1); oy += kTile)
                 for (int ox = sx; ox < std::min(sx + kSuper, Rx + 1); ox += kTile) {
-                    ExitTile t{int(offs.size()), ox, oy, 0, kInfF, 0};
+                    ExitTile t{int(offs.size()), ox, oy, kInfF, 0};
+                    bool any = false;
                     offs.resize(offs.size() + kTile * kTile, ExitOffset{kInfF, 0});
                     win.sectorSlots.resize(offs.size() / (kTile * kTile) * kSectors, 0);
                     uint64_t* slotsOf =
@@ -318,13 +317,13 @@ ExitWindow MakeExitWindow(int W, int H, int Rx, int Ry, double e) {
                                 RectSectorMask(x0, x1, y0, y1)};
                             const int slot = (dy - oy) * kTile + (dx - ox);
                             offs[size_t(t.begin + slot)] = o;
-                            t.valid |= uint64_t(1) << slot;
+                            any = true;
                             for (unsigned m = o.mask; m; m &= m - 1)
                                 slotsOf[std::countr_zero(m)] |= uint64_t(1) << slot;
                             t.minDist = std::min(t.minDist, o.dist);
                             t.mask |= o.mask;
                         }
-                    if (!t.valid) {
+                    if (!any) {
                         offs.resize(size_t(t.begin));
                         win.sectorSlots.resize(win.sectorSlots.size() - kSectors);
                         continue;
