@@ -88,6 +88,12 @@ template <typename A, typename B>
 #else
 #define RS_INLINE inline
 #endif
+/// Keeps a large, rarely run function out of line (its callers' builds stay fast).
+#if defined(__GNUC__)
+#define RS_NOINLINE __attribute__((noinline))
+#else
+#define RS_NOINLINE
+#endif
 
 #ifdef NDEBUG
 #define RS_DCHECK(cond) ((void)0)

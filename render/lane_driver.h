@@ -71,52 +71,60 @@ struct PackRun {
     int base = 0;
 };
 
-/// Loads pack [base, base + width) of the batch (lanes past n repeat lane n-1, inactive)
-/// and begins the kernel on it.
-template <class K, class L>
-RS_INLINE void BeginPack(const typename K::Params& params, const BatchJob& job,
-                         const LaneBatch& b, int base, PackRun<K, L>& p) {
+/// The rays of pack [base, base + width) of the batch (lanes past n repeat lane n-1 and
+/// are not valid). Kernel-independent and run once per pack, so out of line (LightPack).
+template <class L>
+RS_NOINLINE void LoadPackRays(const BatchJob& job, const LaneBatch& b, int base,
+                              LaneRay<L>& ray, typename L::M& valid) {
     using F = typename L::F;
     constexpr int N = L::kWidth;
-    // A slot is reused for the next pack: the driver's fields are reset here, the ray
-    // below and the kernel's state and first fetch by Begin (not a whole-struct copy of
-    // a fresh PackRun, which measured as 4% of a relief batch).
-    p.fetches = F(0.0f);
-    p.texels = F(0.0f);
-    p.valid = typename L::M(true);
-    p.exhausted = typename L::M(false);
-    p.base = base;
+    valid = typename L::M(true);
     if (b.px) {
         F px(0.0f), py(0.0f);
         for (int k = 0; k < N; ++k) {
             const int i = base + k < b.n ? base + k : b.n - 1;
             px[k] = float(b.px[i]);
             py[k] = float(b.py[i]);
-            p.valid[k] = base + k < b.n;
+            valid[k] = base + k < b.n;
         }
-        p.ray = PixelToRayLanes<L>(*job.view, px, py);
+        ray = PixelToRayLanes<L>(*job.view, px, py);
     } else if (base + N <= b.n) {
-        p.ray.uEntry.copy_from(b.uEntry + base, stdx::element_aligned);
-        p.ray.vEntry.copy_from(b.vEntry + base, stdx::element_aligned);
-        p.ray.du.copy_from(b.du + base, stdx::element_aligned);
-        p.ray.dv.copy_from(b.dv + base, stdx::element_aligned);
+        ray.uEntry.copy_from(b.uEntry + base, stdx::element_aligned);
+        ray.vEntry.copy_from(b.vEntry + base, stdx::element_aligned);
+        ray.du.copy_from(b.du + base, stdx::element_aligned);
+        ray.dv.copy_from(b.dv + base, stdx::element_aligned);
         if (b.viewZ)
-            p.ray.viewZ.copy_from(b.viewZ + base, stdx::element_aligned);
+            ray.viewZ.copy_from(b.viewZ + base, stdx::element_aligned);
         else
-            p.ray.viewZ = F(1.0f);
+            ray.viewZ = F(1.0f);
     } else {
         for (int k = 0; k < N; ++k) {
             const int i = base + k < b.n ? base + k : b.n - 1;
-            p.ray.uEntry[k] = b.uEntry[i];
-            p.ray.vEntry[k] = b.vEntry[i];
-            p.ray.du[k] = b.du[i];
-            p.ray.dv[k] = b.dv[i];
-            p.ray.viewZ[k] = b.viewZ ? b.viewZ[i] : 1.0f;
-            p.valid[k] = base + k < b.n;
+            ray.uEntry[k] = b.uEntry[i];
+            ray.vEntry[k] = b.vEntry[i];
+            ray.du[k] = b.du[i];
+            ray.dv[k] = b.dv[i];
+            ray.viewZ[k] = b.viewZ ? b.viewZ[i] : 1.0f;
+            valid[k] = base + k < b.n;
         }
     }
-    p.ray.mapW = float(job.textures.depth ? job.textures.depth->width : 1);
-    p.ray.mapH = float(job.textures.depth ? job.textures.depth->height : 1);
+    ray.mapW = float(job.textures.depth ? job.textures.depth->width : 1);
+    ray.mapH = float(job.textures.depth ? job.textures.depth->height : 1);
+}
+
+/// Loads pack [base, base + width) of the batch and begins the kernel on it.
+template <class K, class L>
+RS_INLINE void BeginPack(const typename K::Params& params, const BatchJob& job,
+                         const LaneBatch& b, int base, PackRun<K, L>& p) {
+    using F = typename L::F;
+    // A slot is reused for the next pack: the driver's fields are reset here, the ray
+    // below and the kernel's state and first fetch by Begin (not a whole-struct copy of
+    // a fresh PackRun, which measured as 4% of a relief batch).
+    p.fetches = F(0.0f);
+    p.texels = F(0.0f);
+    p.exhausted = typename L::M(false);
+    p.base = base;
+    LoadPackRays<L>(job, b, base, p.ray, p.valid);
     K::template Begin<L>(params, p.ray, p.state, p.fetch);
     p.active = p.valid;  // a budget, when set, is >= 1: the first fetch is allowed
 }
@@ -165,38 +173,40 @@ RS_INLINE void TripPack(const typename K::Params& params, const BatchJob& job,
     p.active = want;
 }
 
-/// Writes a finished pack's results (and its shading, when asked) into the batch.
-template <class K, class L>
-RS_INLINE void EndPack(const typename K::Params& params, const BatchJob& job,
-                       const LaneTextures& tex, LaneBatch& b, const PackRun<K, L>& p) {
+/// Lights and shades a finished pack (`answered`: the lanes with an answer to light)
+/// and writes its results into the batch. Independent of the kernel and run once per
+/// pack, so out of line: inlined into every kernel's pack loop, its dozen fetches (light
+/// rays, shading) and per-lane stores made each lane unit's build several times longer
+/// (GCC's points-to analysis and inliner grow faster than the function they work on).
+template <class L>
+RS_NOINLINE void StorePack(const BatchJob& job, const LaneTextures& tex, LaneBatch& b,
+                           int base, const LaneOutcome<L>& out,
+                           const typename L::M& answered, const typename L::M& valid,
+                           const typename L::M& exhausted, const typename L::F& fetches,
+                           const typename L::F& texels) {
     using F = typename L::F;
-    LaneOutcome<L> out;
-    K::template End<L>(params, p.ray, p.state, out);
     F rgb[3] = {F(0.0f), F(0.0f), F(0.0f)};
     F shadowFetches(0.0f);
-    // The lanes with an answer to shade and light: those that hit, and for a kernel
-    // that answers where it stopped (the cone family), every lane.
-    const typename L::M answered = KernelAnswersAtStop<K> ? typename L::M(true) : out.hit;
-    const F vis = LightVisibility<L>(tex, job.shadow, out.u, out.v, answered && p.valid,
+    const F vis = LightVisibility<L>(tex, job.shadow, out.u, out.v, answered && valid,
                                      shadowFetches);
-    const F ao = AmbientOcclusion<L>(tex, job.shadow, out.u, out.v, answered && p.valid,
+    const F ao = AmbientOcclusion<L>(tex, job.shadow, out.u, out.v, answered && valid,
                                      shadowFetches);
     if (b.rgb)
         ShadeHit<L>(tex, job.slopeScale, job.light, out.u, out.v, out.depth, answered,
-                    p.valid, vis, ao, rgb);
+                    valid, vis, ao, rgb);
     for (int k = 0; k < L::kWidth; ++k) {
-        if (!p.valid[k]) continue;
-        const int i = p.base + k;
+        if (!valid[k]) continue;
+        const int i = base + k;
         b.u[i] = out.u[k];
         b.v[i] = out.v[k];
         b.depth[i] = out.depth[k];
         b.nCoarse[i] = uint16_t(out.nCoarse[k]);
         b.nRefine[i] = uint16_t(out.nRefine[k]);
-        b.fetches[i] = uint32_t(p.fetches[k]);
-        b.texelReads[i] = uint32_t(p.texels[k]);
+        b.fetches[i] = uint32_t(fetches[k]);
+        b.texelReads[i] = uint32_t(texels[k]);
         uint8_t f = 0;
         if (!out.hit[k]) f |= kFlagNoHit;
-        if (p.exhausted[k]) f |= kFlagBudgetExhausted;
+        if (exhausted[k]) f |= kFlagBudgetExhausted;
         b.flags[i] = f;
         if (b.rgb)
             for (int c = 0; c < 3; ++c) b.rgb[3 * i + c] = rgb[c][k];
@@ -204,6 +214,19 @@ RS_INLINE void EndPack(const typename K::Params& params, const BatchJob& job,
         if (b.visibility) b.visibility[i] = vis[k];
         if (b.ambient) b.ambient[i] = ao[k];
     }
+}
+
+/// Writes a finished pack's results (and its shading, when asked) into the batch.
+template <class K, class L>
+RS_INLINE void EndPack(const typename K::Params& params, const BatchJob& job,
+                       const LaneTextures& tex, LaneBatch& b, const PackRun<K, L>& p) {
+    LaneOutcome<L> out;
+    K::template End<L>(params, p.ray, p.state, out);
+    // The lanes with an answer to shade and light: those that hit, and for a kernel
+    // that answers where it stopped (the cone family), every lane.
+    const typename L::M answered = KernelAnswersAtStop<K> ? typename L::M(true) : out.hit;
+    StorePack<L>(job, tex, b, p.base, out, answered, p.valid, p.exhausted, p.fetches,
+                 p.texels);
 }
 
 /// Runs every pack of the batch, kPacks in flight: their trips alternate, so the fetch

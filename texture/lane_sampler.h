@@ -479,6 +479,56 @@ RS_INLINE typename L::F SamplePaddedLanes(const LaneTextures& tex, const float* 
     return Fma(t.w, r1 - r0, r0);
 }
 
+/// SampleHeightLanes where no lane layout applies: the scalar sampler, lane by lane.
+/// Out of line (RS_NOINLINE), as is SampleConeScalarLanes: a slow path, and inlined at
+/// each of a unit's fetch sites its sixteen calls made the lane units' builds several
+/// times longer.
+template <class L, bool kCount>
+RS_NOINLINE typename L::F SampleHeightScalarLanes(const LaneTextures& tex,
+                                                  const typename L::F& u,
+                                                  const typename L::F& v,
+                                                  const typename L::M& active,
+                                                  typename L::F& texelReads) {
+    typename L::F out(0.0f);
+    for (int k = 0; k < L::kWidth; ++k) {
+        if (!active[k]) continue;
+        FetchCounts counts;
+        out[k] = SampleCounted(*tex.field, tex.sampler, u[k], v[k], &counts);
+        if constexpr (kCount) texelReads[k] = texelReads[k] + float(counts.nTexelReads);
+    }
+    return out;
+}
+
+/// SampleHeightConeStackLanes where no lane layout applies: the depth into h and layer
+/// layer + l's ratio channel into c[l], with the scalar samplers, lane by lane.
+template <class L, int kLayers>
+RS_NOINLINE void SampleConeScalarLanes(const LaneTextures& tex, const typename L::F& u,
+                                       const typename L::F& v, const typename L::I& layer,
+                                       const typename L::M& active,
+                                       typename L::F& texelReads, typename L::F& h,
+                                       typename L::F* c) {
+    const SamplerState& st = tex.sampler;
+    for (int l = 0; l < kLayers; ++l) c[l] = typename L::F(0.0f);
+    for (int k = 0; k < L::kWidth; ++k) {
+        if (!active[k]) continue;
+        SamplerState coneState = st;
+        coneState.filter = tex.coneFilter;
+        for (int l = 0; l < kLayers; ++l) {
+            FetchCounts counts;
+            const float hk = SampleCounted(*tex.field, st, u[k], v[k], &counts);
+            if (l == 0) h[k] = hk;
+            FetchCounts cone;
+            const int layerK = layer[k] + l;
+            RS_DCHECK(layerK >= 0 && layerK < tex.coneLayers);
+            c[l][k] = SampleCounted(*tex.coneField[size_t(layerK)], coneState, u[k], v[k],
+                                    &cone);
+            texelReads[k] = texelReads[k] + float(counts.nTexelReads);
+            if (tex.coneFilter != st.filter)  // a second sample with its own footprint
+                texelReads[k] = texelReads[k] + float(cone.nTexelReads);
+        }
+    }
+}
+
 }  // namespace detail
 
 template <class L, bool kCount = true>
@@ -509,14 +559,7 @@ RS_INLINE typename L::F SampleHeightLanes(const LaneTextures& tex, const typenam
     if (tex.padded)
         return detail::SamplePaddedLanes<L, kCount>(
             tex, tex.padded, tex.paddedCount, st.filter, u, v, I(0), active, texelReads);
-    F out(0.0f);
-    for (int k = 0; k < L::kWidth; ++k) {
-        if (!active[k]) continue;
-        FetchCounts counts;
-        out[k] = SampleCounted(*tex.field, st, u[k], v[k], &counts);
-        if constexpr (kCount) texelReads[k] = texelReads[k] + float(counts.nTexelReads);
-    }
-    return out;
+    return detail::SampleHeightScalarLanes<L, kCount>(tex, u, v, active, texelReads);
 }
 
 /// One fetch per active lane of the cone kernels' combined texture, reading kLayers
@@ -621,26 +664,8 @@ RS_INLINE typename L::F SampleHeightConeStackLanes(
             }
         }
     } else {
-        for (int l = 0; l < kLayers; ++l) c[l] = F(0.0f);
-        for (int k = 0; k < L::kWidth; ++k) {
-            if (!active[k]) continue;
-            SamplerState coneState = st;
-            coneState.filter = tex.coneFilter;
-            for (int l = 0; l < kLayers; ++l) {
-                FetchCounts counts;
-                const float hk = SampleCounted(*tex.field, st, u[k], v[k], &counts);
-                if (l == 0) h[k] = hk;
-                FetchCounts cone;
-                const int layerK = layer[k] + l;
-                RS_DCHECK(layerK >= 0 && layerK < tex.coneLayers);
-                c[l][k] = SampleCounted(*tex.coneField[size_t(layerK)], coneState, u[k],
-                                        v[k], &cone);
-                texelReads[k] = texelReads[k] + float(counts.nTexelReads);
-                if (tex.coneFilter !=
-                    st.filter)  // a second sample with its own footprint
-                    texelReads[k] = texelReads[k] + float(cone.nTexelReads);
-            }
-        }
+        detail::SampleConeScalarLanes<L, kLayers>(tex, u, v, layer, active, texelReads, h,
+                                                  c);
     }
     for (int l = 0; l < kLayers; ++l) ratio[l] = tex.coneSquared ? c[l] * c[l] : c[l];
     return h;
