@@ -72,7 +72,7 @@ struct PackRun {
 };
 
 /// The rays of pack [base, base + width) of the batch (lanes past n repeat lane n-1 and
-/// are not valid). Kernel-independent and run once per pack, so out of line (LightPack).
+/// are not valid). Kernel-independent and run once per pack, so out of line (StorePack).
 template <class L>
 RS_NOINLINE void LoadPackRays(const BatchJob& job, const LaneBatch& b, int base,
                               LaneRay<L>& ray, typename L::M& valid) {
