@@ -71,11 +71,21 @@ struct PackRun {
     int base = 0;
 };
 
-/// The rays of pack [base, base + width) of the batch (lanes past n repeat lane n-1 and
-/// are not valid). Kernel-independent and run once per pack, so out of line (StorePack).
+/// Whether BeginPack loads the rays inline (LoadPackRaysBody) rather than through the
+/// out-of-line LoadPackRays: at one lane only. There a pack is one ray, so the call comes
+/// once per ray; inline, the shortest kernels (parallax, offset-limit: ~2 fetches a ray)
+/// ran 0.85x the time at one lane, and linear, secant, mcns and maxmip 0.87-1.03x
+/// (bench/kernels_bench BM_Kernel/<kernel>/1, five alternating rounds). Inlining
+/// StorePack too helped those two more (0.76-0.80x) but made secant and linear
+/// 1.07-1.10x slower: it stays out of line.
 template <class L>
-RS_NOINLINE void LoadPackRays(const BatchJob& job, const LaneBatch& b, int base,
-                              LaneRay<L>& ray, typename L::M& valid) {
+inline constexpr bool kLoadRaysInline = L::kWidth == 1;
+
+/// The rays of pack [base, base + width) of the batch (lanes past n repeat lane n-1 and
+/// are not valid). LoadPackRays runs it out of line (kLoadRaysInline).
+template <class L>
+RS_INLINE void LoadPackRaysBody(const BatchJob& job, const LaneBatch& b, int base,
+                                LaneRay<L>& ray, typename L::M& valid) {
     using F = typename L::F;
     constexpr int N = L::kWidth;
     valid = typename L::M(true);
@@ -112,6 +122,14 @@ RS_NOINLINE void LoadPackRays(const BatchJob& job, const LaneBatch& b, int base,
     ray.mapH = float(job.textures.depth ? job.textures.depth->height : 1);
 }
 
+/// LoadPackRaysBody out of line: kernel-independent and run once per pack, so each lane
+/// unit holds it once rather than once per kernel (StorePack says why that matters).
+template <class L>
+RS_NOINLINE void LoadPackRays(const BatchJob& job, const LaneBatch& b, int base,
+                              LaneRay<L>& ray, typename L::M& valid) {
+    LoadPackRaysBody<L>(job, b, base, ray, valid);
+}
+
 /// Loads pack [base, base + width) of the batch and begins the kernel on it.
 template <class K, class L>
 RS_INLINE void BeginPack(const typename K::Params& params, const BatchJob& job,
@@ -124,7 +142,10 @@ RS_INLINE void BeginPack(const typename K::Params& params, const BatchJob& job,
     p.texels = F(0.0f);
     p.exhausted = typename L::M(false);
     p.base = base;
-    LoadPackRays<L>(job, b, base, p.ray, p.valid);
+    if constexpr (kLoadRaysInline<L>)
+        LoadPackRaysBody<L>(job, b, base, p.ray, p.valid);
+    else
+        LoadPackRays<L>(job, b, base, p.ray, p.valid);
     K::template Begin<L>(params, p.ray, p.state, p.fetch);
     p.active = p.valid;  // a budget, when set, is >= 1: the first fetch is allowed
 }

@@ -508,11 +508,11 @@ RS_NOINLINE void SampleConeScalarLanes(const LaneTextures& tex, const typename L
                                        typename L::F& texelReads, typename L::F& h,
                                        typename L::F* c) {
     const SamplerState& st = tex.sampler;
+    SamplerState coneState = st;
+    coneState.filter = tex.coneFilter;
     for (int l = 0; l < kLayers; ++l) c[l] = typename L::F(0.0f);
     for (int k = 0; k < L::kWidth; ++k) {
         if (!active[k]) continue;
-        SamplerState coneState = st;
-        coneState.filter = tex.coneFilter;
         for (int l = 0; l < kLayers; ++l) {
             FetchCounts counts;
             const float hk = SampleCounted(*tex.field, st, u[k], v[k], &counts);
