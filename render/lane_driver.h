@@ -74,7 +74,7 @@ struct PackRun {
 /// Whether BeginPack loads the rays inline (LoadPackRaysBody) rather than through the
 /// out-of-line LoadPackRays: at one lane only. There a pack is one ray, so the call comes
 /// once per ray; inline, the shortest kernels (parallax, offset-limit: ~2 fetches a ray)
-/// ran 0.85x the time at one lane, and linear, secant, mcns and maxmip 0.87-1.03x
+/// ran 0.85-0.87x the time at one lane, linear, secant, mcns and maxmip 0.87-1.03x
 /// (bench/kernels_bench BM_Kernel/<kernel>/1, five alternating rounds). Inlining
 /// StorePack too helped those two more (0.76-0.80x) but made secant and linear
 /// 1.07-1.10x slower: it stays out of line.
