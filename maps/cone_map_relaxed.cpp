@@ -7,10 +7,12 @@
 // destination) pairs that provably cannot lower the running minimum, by two bounds: the
 // distance bound (the march moves away from the source and down) and the exit bound (the
 // exit field: per texel and 22.5 degree sector, a lower bound of the distance to a cell
-// that can end the march). Both apply to single offsets and to 4x4, 8x8 and 32x32 groups
-// of offsets. Stages: BuildExitField, GroupTileOffsets and BoundSuperTiles set up the
-// bounds, RelaxedSearch::SearchTexel searches one texel (super-tiles, tiles, quarters,
-// offsets). Proofs, with the slack terms for float error: docs/cone_maps.md, section
+// that can end the march). Both apply to single pairs and to 4x4, 8x8 and 32x32 windows
+// of destinations. The search takes 4x4 source texels at a time (RelaxedTileSearch), so
+// that each destination's depth and exit-field bytes are loaded once for up to 16 apexes.
+// Stages: BuildExitField, MakeDenseOffsets and MakeLaneWindows set up the bounds,
+// RelaxedTileSearch::SearchTile searches one tile (super-tiles, tiles, quarters,
+// destinations). Proofs, with the slack terms for float error: docs/cone_maps.md, section
 // "Exact pruning of the Listing".
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -491,49 +493,6 @@ inline float MinOverSectors(const ExitField& f, const std::vector<uint8_t>& fiel
     return f.decode[m];
 }
 
-/// One offset of the pruned search, with what its tests need. The bounds are floats
-/// rounded down from their double values (each is used as a lower bound; 36 bytes an
-/// offset, and a 2048² map has 4 M offsets).
-struct RelaxedOffset {
-    float distLo;  ///< below the float distance bound (MakeRelaxedOffset's margins)
-    float dist;    ///< uv distance (rounded down)
-    float invD;    ///< (1 - 2^-20) / (dist + 2^-21), rounded down
-    float stepK;   ///< one march step is >= stepK * (1 - b) / b (b: destination depth)
-    int dx, dy;
-    float fdx, fdy;   ///< float(dx) / W, float(dy) / H: the listing's offset
-    uint8_t lx, ly;   ///< position in its 8x8 tile
-    SectorBits mask;  ///< sectors the listing's float step direction can lie in
-};
-/// A group of offsets (an 8x8 tile or one of its 4x4 quarters) with bounds for all of
-/// them.
-struct RelaxedGroup {
-    int begin = 0, end = 0;  ///< range in the offset list
-    int ox = 0, oy = 0;      ///< window origin relative to the source texel
-    double distLo = 0;       ///< min distLo of its offsets
-    double dLo = 0;          ///< min exact distance
-    double invD = 1;         ///< min invD (farthest offset)
-    SectorBits mask = 0;     ///< union of the offsets' sectors
-    void Add(const RelaxedOffset& o) {
-        Add(double(o.distLo), double(o.dist), double(o.invD), o.mask);
-    }
-    /// Extends the bounds to a whole group (a tile into its super-tile); counts one
-    /// member.
-    void Add(const RelaxedGroup& g) { Add(g.distLo, g.dLo, g.invD, g.mask); }
-
-  private:
-    void Add(double lo, double d, double inv, SectorBits m) {
-        distLo = begin == end ? lo : std::min(distLo, lo);
-        dLo = begin == end ? d : std::min(dLo, d);
-        invD = std::min(invD, inv);
-        mask |= m;
-        ++end;
-    }
-};
-struct RelaxedTile {
-    RelaxedGroup all;
-    RelaxedGroup quarter[4];
-    int nx = 0, ny = 0;  ///< extent of its offsets
-};
 enum class RelaxedOut { Ratio, ConeNormal, Stacked };
 
 /// The output of a relaxed map: ratios, n_z of them, or K stacked channels.
@@ -574,87 +533,28 @@ void BruteRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geometr
                       });
 }
 
-/// One offset of tile t with its bounds (margins: docs/cone_maps.md, section "Margins of
+/// The bounds of offset (dx, dy) (squared distance S = g.S(dx, dy)): RelaxedOffset's
+/// distLo, dist, invD, stepK and mask (margins: docs/cone_maps.md, section "Margins of
 /// the per-offset bounds").
-RelaxedOffset MakeRelaxedOffset(const Offset& off, const OffsetTile& t, const Geometry& g,
-                                int W, int H, int steps) {
-    RelaxedOffset ro;
-    const double dist = std::sqrt(double(off.s)) / g.scale;
-    ro.dist = NonNegFloatAtMost(dist);
-    ro.distLo = NonNegFloatAtMost(std::max(0.0, dist - 0x1p-20) * (1.0 - 0x1p-19));
-    ro.invD = NonNegFloatAtMost((1.0 - 0x1p-20) * (1.0 - 0x1p-40) / (dist + 0x1p-21));
-    ro.stepK = NonNegFloatAtMost(std::max(0.0, dist - 0x1p-22) / double(steps) *
+struct OffsetBounds {
+    float distLo, dist, invD, stepK;
+    SectorBits mask;
+};
+OffsetBounds MakeOffsetBounds(const Geometry& g, int W, int H, int steps, int dx,
+                              int dy) {
+    OffsetBounds ob;
+    const double dist = std::sqrt(double(g.S(dx, dy))) / g.scale;
+    ob.dist = NonNegFloatAtMost(dist);
+    ob.distLo = NonNegFloatAtMost(std::max(0.0, dist - 0x1p-20) * (1.0 - 0x1p-19));
+    ob.invD = NonNegFloatAtMost((1.0 - 0x1p-20) * (1.0 - 0x1p-40) / (dist + 0x1p-21));
+    ob.stepK = NonNegFloatAtMost(std::max(0.0, dist - 0x1p-22) / double(steps) *
                                  (1.0 - 0x1p-20) * (1.0 - 0x1p-30));
-    ro.dx = off.dx;
-    ro.dy = off.dy;
-    ro.fdx = float(off.dx) / float(W);
-    ro.fdy = float(off.dy) / float(H);
-    ro.lx = uint8_t(off.dx - t.ox);
-    ro.ly = uint8_t(off.dy - t.oy);
     // Sectors the listing's float step direction can lie in (tolerance:
     // docs/cone_maps.md, section "Margins of the per-offset bounds").
-    const double angle = std::atan2(double(off.dy) / H, double(off.dx) / W);
+    const double angle = std::atan2(double(dy) / H, double(dx) / W);
     const double tol = 0x1p-22 / dist + 1e-12;
-    ro.mask = IntervalSectorMask(angle - tol, angle + tol);
-    return ro;
-}
-
-/// The offsets of the pruned search: the tiled offsets of the brute force (8x8 tiles
-/// sorted by distance), inside a tile grouped by 4x4 quarter, with the bounds of every
-/// quarter, tile and 32x32 super-tile.
-struct RelaxedGroups {
-    std::vector<RelaxedOffset> offs;
-    std::vector<RelaxedTile> tiles;
-    std::vector<RelaxedGroup> superBounds;  ///< per to.supers entry
-};
-
-/// Offsets and groups of every tile of `to`, quarter by quarter.
-void GroupTileOffsets(const TiledOffsets& to, const Geometry& g, int W, int H, int steps,
-                      RelaxedGroups& groups) {
-    std::vector<RelaxedOffset>& offs = groups.offs;
-    offs.reserve(to.offsets.size());
-    groups.tiles.resize(to.tiles.size());
-    for (size_t ti = 0; ti < to.tiles.size(); ++ti) {
-        const OffsetTile& t = to.tiles[ti];
-        RelaxedTile& rt = groups.tiles[ti];
-        std::vector<RelaxedOffset> q[4];
-        for (int o = t.begin; o < t.end; ++o) {
-            const RelaxedOffset off =
-                MakeRelaxedOffset(to.offsets[size_t(o)], t, g, W, H, steps);
-            rt.nx = std::max(rt.nx, int(off.lx) + 1);
-            rt.ny = std::max(rt.ny, int(off.ly) + 1);
-            q[(off.lx >= 4 ? 1 : 0) + (off.ly >= 4 ? 2 : 0)].push_back(off);
-        }
-        rt.all.begin = rt.all.end = int(offs.size());
-        rt.all.ox = t.ox;
-        rt.all.oy = t.oy;
-        for (int k = 0; k < 4; ++k) {
-            RelaxedGroup& gq = rt.quarter[k];
-            gq.begin = gq.end = int(offs.size());
-            gq.ox = t.ox + (k & 1) * 4;
-            gq.oy = t.oy + (k >> 1) * 4;
-            for (const RelaxedOffset& off : q[k]) {
-                offs.push_back(off);
-                gq.Add(off);
-                rt.all.Add(off);
-            }
-        }
-    }
-}
-
-/// Bounds of the 32x32 super-tiles of the tiled offsets (to.supers, sorted by distance;
-/// their tiles sorted by distance inside). Any order of evaluation gives the same
-/// minimum.
-void BoundSuperTiles(const TiledOffsets& to, RelaxedGroups& groups) {
-    groups.superBounds.resize(to.supers.size());
-    for (size_t si = 0; si < to.supers.size(); ++si) {
-        const OffsetSuperTile& st = to.supers[si];
-        RelaxedGroup& sb = groups.superBounds[si];
-        sb.ox = st.ox;
-        sb.oy = st.oy;
-        for (int x = st.first; x < st.last; ++x)
-            sb.Add(groups.tiles[size_t(to.superOrder[size_t(x)])].all);
-    }
+    ob.mask = IntervalSectorMask(angle - tol, angle + tol);
+    return ob;
 }
 
 /// The running minimum of one (texel, channel) search and the destination that set it.
@@ -673,48 +573,219 @@ struct DepthWindows {
     std::vector<float> shallow;
 };
 
-/// The pruned search of one (source texel, apex): the listing's ratio of every pair that
-/// survives the bounds, tile group by tile group. Pruning is exact (the distance bound
-/// below the listing's float bound, for offsets and whole groups, and the exit bound): a
-/// pair is skipped only when its listing ratio provably cannot lower the running minimum;
-/// ties do not change it either (strict "<" as in the listing), so the minimum equals the
-/// brute force's for any order of evaluation (proof: docs/cone_maps.md, section "Exact
+/// The apex-tile search: the 4x4 source texels of a tile (its lanes) searched together,
+/// so that each destination's depth and exit-field bytes are loaded once for the 16
+/// apexes whose offsets reach it. The destinations are enumerated by their offset e from
+/// the tile's origin, in windows of 32x32, 8x8 and 4x4 (super-tiles, tiles, quarters);
+/// lane l = (lx, ly) reaches destination e by offset e - l. A lane's bounds for a window
+/// are those of its own offsets into it (distLo, dLo, invD), but for the sectors, which
+/// are the union over the window's lanes (a superset: the bound only gets weaker), so
+/// the minimum of each lane is the brute force's (docs/cone_maps.md, section "Exact
 /// pruning of the Listing").
-struct RelaxedSearch {
+constexpr int kApexSide = 4;
+constexpr int kLanes = kApexSide * kApexSide;
+using LaneBits = uint32_t;
+
+/// The offsets' bounds (OffsetBounds) in a dense table over [-halfX - kPadLo, halfX +
+/// kPadHi] x [-halfY - kPadLo, halfY + kPadHi]: the lanes' offsets of every window
+/// stay inside it. Offsets outside the definition's range and (0, 0) have distLo = +inf
+/// (every bound prunes them).
+struct DenseOffsets {
+    static constexpr int kPadLo = kApexSide - 1;
+    static constexpr int kPadHi = kSuperTile * kTile + kApexSide;
+    int hx = 0, hy = 0, pitch = 0;
+    std::vector<float> distLo, dist, invD, stepK;
+    std::vector<SectorBits> mask;
+    size_t Index(int dx, int dy) const {
+        return size_t(dy + hy + kPadLo) * size_t(pitch) + size_t(dx + hx + kPadLo);
+    }
+    bool Valid(size_t o) const { return distLo[o] < kInfF; }
+};
+
+DenseOffsets MakeDenseOffsets(const Geometry& g, int W, int H, int steps) {
+    DenseOffsets t;
+    t.hx = g.halfX;
+    t.hy = g.halfY;
+    t.pitch = 2 * t.hx + 1 + DenseOffsets::kPadLo + DenseOffsets::kPadHi;
+    const int rows = 2 * t.hy + 1 + DenseOffsets::kPadLo + DenseOffsets::kPadHi;
+    const size_t n = size_t(t.pitch) * size_t(rows);
+    t.distLo.assign(n, kInfF);
+    t.dist.assign(n, kInfF);
+    t.invD.assign(n, 0.0f);
+    t.stepK.assign(n, 0.0f);
+    t.mask.assign(n, 0);
+    tbb::parallel_for(
+        tbb::blocked_range<int>(-t.hy, t.hy + 1), [&](const tbb::blocked_range<int>& r) {
+            for (int dy = r.begin(); dy < r.end(); ++dy)
+                for (int dx = -t.hx; dx <= t.hx; ++dx) {
+                    if (dx == 0 && dy == 0) continue;
+                    const OffsetBounds ob = MakeOffsetBounds(g, W, H, steps, dx, dy);
+                    const size_t o = t.Index(dx, dy);
+                    t.distLo[o] = ob.distLo;
+                    t.dist[o] = ob.dist;
+                    t.invD[o] = ob.invD;
+                    t.stepK[o] = ob.stepK;
+                    t.mask[o] = ob.mask;
+                }
+        });
+    return t;
+}
+
+/// A window of destinations (offsets ex..ex+size-1, ey..ey+size-1 from the tile origin)
+/// with, per lane, bounds over the lane's offsets into it: the least distLo and dist, the
+/// least invD (distLo = +inf when it has none).
+struct LaneGroup {
+    std::array<float, kLanes> distLo, dLo, invD;
+    float minDistLo = kInfF;  ///< over the lanes
+    int ex = 0, ey = 0;
+    SectorBits mask = 0;  ///< over the lanes and offsets
+    void Clear() {
+        distLo.fill(kInfF);
+        dLo.fill(kInfF);
+        invD.fill(kInfF);
+    }
+    void Add(const LaneGroup& o) {
+        for (int l = 0; l < kLanes; ++l) {
+            distLo[size_t(l)] = std::min(distLo[size_t(l)], o.distLo[size_t(l)]);
+            dLo[size_t(l)] = std::min(dLo[size_t(l)], o.dLo[size_t(l)]);
+            invD[size_t(l)] = std::min(invD[size_t(l)], o.invD[size_t(l)]);
+        }
+        minDistLo = std::min(minDistLo, o.minDistLo);
+        mask |= o.mask;
+    }
+};
+
+/// The windows of the apex-tile search: quarters and tiles in grids (tile (tx, ty) holds
+/// quarters (2 tx + a, 2 ty + b)), super-tiles sorted by distance, the tiles of each
+/// sorted by distance (empty windows left out).
+struct LaneWindows {
+    int nqx = 0, nqy = 0, ntx = 0;
+    std::vector<LaneGroup> quarters, tiles, supers;
+    std::vector<std::vector<int>> superTiles;  ///< per super-tile: tile indices
+};
+
+LaneWindows MakeLaneWindows(const DenseOffsets& d) {
+    constexpr int kSuper = kSuperTile * kTile;
+    LaneWindows lw;
+    const int nsx = (2 * d.hx + kApexSide + kSuper - 1) / kSuper;
+    const int nsy = (2 * d.hy + kApexSide + kSuper - 1) / kSuper;
+    lw.ntx = nsx * kSuperTile;
+    const int nty = nsy * kSuperTile;
+    lw.nqx = 2 * lw.ntx;
+    lw.nqy = 2 * nty;
+    lw.quarters.resize(size_t(lw.nqx) * size_t(lw.nqy));
+    tbb::parallel_for(
+        tbb::blocked_range<int>(0, lw.nqy), [&](const tbb::blocked_range<int>& r) {
+            for (int qy = r.begin(); qy < r.end(); ++qy)
+                for (int qx = 0; qx < lw.nqx; ++qx) {
+                    LaneGroup& q = lw.quarters[size_t(qy) * size_t(lw.nqx) + size_t(qx)];
+                    q.Clear();
+                    q.ex = -d.hx + 4 * qx;
+                    q.ey = -d.hy + 4 * qy;
+                    for (int l = 0; l < kLanes; ++l) {
+                        const int lx = l % kApexSide, ly = l / kApexSide;
+                        for (int a = 0; a < 4; ++a)
+                            for (int b = 0; b < 4; ++b) {
+                                const size_t o = d.Index(q.ex + b - lx, q.ey + a - ly);
+                                if (!d.Valid(o)) continue;
+                                q.distLo[size_t(l)] =
+                                    std::min(q.distLo[size_t(l)], d.distLo[o]);
+                                q.dLo[size_t(l)] = std::min(q.dLo[size_t(l)], d.dist[o]);
+                                q.invD[size_t(l)] =
+                                    std::min(q.invD[size_t(l)], d.invD[o]);
+                                q.mask |= d.mask[o];
+                            }
+                        q.minDistLo = std::min(q.minDistLo, q.distLo[size_t(l)]);
+                    }
+                }
+        });
+    lw.tiles.resize(size_t(lw.ntx) * size_t(nty));
+    for (int ty = 0; ty < nty; ++ty)
+        for (int tx = 0; tx < lw.ntx; ++tx) {
+            LaneGroup& t = lw.tiles[size_t(ty) * size_t(lw.ntx) + size_t(tx)];
+            t.Clear();
+            t.ex = -d.hx + kTile * tx;
+            t.ey = -d.hy + kTile * ty;
+            for (int k = 0; k < 4; ++k)
+                t.Add(lw.quarters[size_t(2 * ty + (k >> 1)) * size_t(lw.nqx) +
+                                  size_t(2 * tx + (k & 1))]);
+        }
+    for (int sy = 0; sy < nsy; ++sy)
+        for (int sx = 0; sx < nsx; ++sx) {
+            LaneGroup s;
+            s.Clear();
+            s.ex = -d.hx + kSuper * sx;
+            s.ey = -d.hy + kSuper * sy;
+            std::vector<int> members;
+            for (int ty = sy * kSuperTile; ty < (sy + 1) * kSuperTile; ++ty)
+                for (int tx = sx * kSuperTile; tx < (sx + 1) * kSuperTile; ++tx) {
+                    const int ti = ty * lw.ntx + tx;
+                    if (!(lw.tiles[size_t(ti)].minDistLo < kInfF)) continue;
+                    members.push_back(ti);
+                    s.Add(lw.tiles[size_t(ti)]);
+                }
+            if (members.empty()) continue;
+            std::stable_sort(members.begin(), members.end(), [&](int a, int b) {
+                return lw.tiles[size_t(a)].minDistLo < lw.tiles[size_t(b)].minDistLo;
+            });
+            lw.supers.push_back(s);
+            lw.superTiles.push_back(std::move(members));
+        }
+    std::vector<size_t> order(lw.supers.size());
+    for (size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+        return lw.supers[a].minDistLo < lw.supers[b].minDistLo;
+    });
+    std::vector<LaneGroup> supers(order.size());
+    std::vector<std::vector<int>> superTiles(order.size());
+    for (size_t k = 0; k < order.size(); ++k) {
+        supers[k] = lw.supers[order[k]];
+        superTiles[k] = std::move(lw.superTiles[order[k]]);
+    }
+    lw.supers = std::move(supers);
+    lw.superTiles = std::move(superTiles);
+    return lw;
+}
+
+/// The running minima of one tile's lanes and their minimisers (offsets from the lane's
+/// texel).
+struct TileBest {
+    std::array<RelaxedBest, kLanes> lane;
+};
+
+struct RelaxedTileSearch {
     const DepthField& hf;
-    const TiledOffsets& to;
-    const RelaxedGroups& groups;
+    const DenseOffsets& d;
+    const LaneWindows& lw;
     const DepthWindows& dw;
     const ExitField& ef;
-    int steps;  ///< the listing's search steps
-    float inv;  ///< PowerOfTwoInverse(steps)
+    int steps;
+    float inv;
     float dmin;
-    int halfX;  ///< Geometry::halfX
-    // The texel searched and its running minimum.
-    int i = 0, j = 0;
-    float apex = 0;
-    double dApex = 0;
-    float sx = 0, sy = 0;  ///< the listing's source position
-    RelaxedBest rb;
+    // The tile searched.
+    int I = 0, J = 0;
+    LaneBits active = 0;
+    std::array<float, kLanes> apex{}, sx{}, sy{};
+    std::array<double, kLanes> dApex{}, reach{};
+    std::array<size_t, kLanes> laneDelta{};
+    TileBest tb;
 
-    RelaxedSearch(const DepthField& hf, const TiledOffsets& to,
-                  const RelaxedGroups& groups, const DepthWindows& dw,
-                  const ExitField& ef, int steps, float inv, float dmin, int halfX)
-        : hf(hf),
-          to(to),
-          groups(groups),
-          dw(dw),
-          ef(ef),
-          steps(steps),
-          inv(inv),
-          dmin(dmin),
-          halfX(halfX) {}
+    RelaxedTileSearch(const DepthField& hf, const DenseOffsets& d, const LaneWindows& lw,
+                      const DepthWindows& dw, const ExitField& ef, int steps, float inv,
+                      float dmin)
+        : hf(hf), d(d), lw(lw), dw(dw), ef(ef), steps(steps), inv(inv), dmin(dmin) {
+        for (int l = 0; l < kLanes; ++l)
+            laneDelta[size_t(l)] =
+                size_t(l / kApexSide) * size_t(d.pitch) + size_t(l % kApexSide);
+    }
 
-    /// The listing's ratio of one pair; lowers the running minimum.
-    RS_INLINE void Consider(int dx, int dy, float fdx, float fdy, float b,
-                            double clear = 0) {
-        const float r = ListingRatio(hf, sx, sy, sx + fdx, sy + fdy, b, steps, inv, apex,
-                                     rb.best, clear);
+    /// The listing's ratio of lane l's pair at offset (dx, dy); lowers its minimum.
+    RS_INLINE void Consider(int l, int dx, int dy, float b, double clear = 0) {
+        RelaxedBest& rb = tb.lane[size_t(l)];
+        const float fdx = float(dx) / float(hf.width), fdy = float(dy) / float(hf.height);
+        const float r = ListingRatio(hf, sx[size_t(l)], sy[size_t(l)],
+                                     sx[size_t(l)] + fdx, sy[size_t(l)] + fdy, b, steps,
+                                     inv, apex[size_t(l)], rb.best, clear);
         if (rb.best > r) {
             rb.best = r;
             rb.argDx = dx;
@@ -723,132 +794,179 @@ struct RelaxedSearch {
         }
     }
 
-    /// A group is skipped when no pair in it can lower `best`: no destination above the
-    /// apex in its window (minimum depth wmin at window index w), the distance bound, or
-    /// the exit bound (lwin: the exit field's minima over windows of the group's size;
-    /// wmax: the window's maximum depth, which bounds the length of one march step).
-    RS_INLINE bool GroupPrunes(const RelaxedGroup& q, size_t w, float wmin, float wmax,
-                               const std::vector<uint8_t>& lwin) const {
-        if (!(wmin < apex)) return true;
-        if (q.distLo >= double(rb.best) * (dApex - double(wmin))) return true;
-        if (!ef.usable) return false;
-        // One step of the march is at least |v| (1 - b) / (b steps) long (OffsetPrunes),
-        // and (1 - b) / b only shrinks as b grows: the window's deepest texel bounds it.
-        if (!(wmax > 0.0f)) return true;  // every destination gives NaN: ignored
-        const double bmax = double(wmax);
-        const double stepLo = (q.dLo - 0x1p-22) * (1.0 - bmax) / (bmax * double(steps)) *
-                              (1.0 - 0x1p-20) * (1.0 - 0x1p-30);
-        return ExitBoundPrunes(ef, q.dLo, q.invD, double(wmin),
-                               double(MinOverSectors(ef, lwin, w, q.mask)), dApex,
-                               double(rb.best), stepLo);
-    }
-
-    /// The same for one offset whose destination texel `dst` has depth b. The listing
-    /// samples exactly this texel as the destination (its float texel coordinate is
-    /// within W * 2^-22 < 1/2 of the centre), so the bounds with its depth hold for the
-    /// pair. When it keeps the pair, `clear` is the exit field's value for it (0 without
-    /// the field): ListingRatio's `clear`.
-    RS_INLINE bool OffsetPrunes(const RelaxedOffset& off, size_t dst, float b,
-                                double& clear) const {
-        const double db = double(b);
-        if (!(b < apex) || double(off.distLo) >= double(rb.best) * (dApex - db))
-            return true;
-        if (ef.usable) {
-            const float lp = MinOverSectors(ef, ef.L, dst, off.mask);
-            // One step of the march is |v| (1 - b) / (b steps) long (float roundings of
-            // v, the scale and the step within the factors: RelaxedOffset::stepK, and
-            // (1 - b) / b rounded down per texel).
-            if (!(b > 0.0f)) return true;  // the listing gives NaN: ignored
-            const double stepLo = double(off.stepK) * double(dw.shallow[dst]);
-            if (ExitBoundPrunes(ef, double(off.dist), double(off.invD), db, double(lp),
-                                dApex, double(rb.best), stepLo))
-                return true;
-            // (1 - 2^-40: the double roundings of ListingRatio's comparison of squares.)
-            clear = double(lp) * (1.0 - 0x1p-40);
+    /// The largest best * (apex - dmin) over the active lanes: a window whose distLo is
+    /// at least this cannot hold a pair that lowers any lane's minimum.
+    double Reach() const {
+        double r = 0;
+        for (LaneBits m = active; m; m &= m - 1) {
+            const int l = std::countr_zero(m);
+            r = std::max(r, double(tb.lane[size_t(l)].best) * reach[size_t(l)]);
         }
-        return false;
+        return r;
     }
 
-    /// Every offset of tile t that survives its quarter's bound and its own.
-    void SearchTile(const RelaxedTile& t, int wx, int wy) {
+    /// The lanes of `lanes` for which window q may hold a pair that lowers the lane's
+    /// minimum. A lane is pruned when no destination lies above its apex in the window
+    /// (least depth wmin at window index w), by the distance bound, or by the exit bound
+    /// (lwin: the exit field's minima over windows of q's size; wmax: the window's
+    /// greatest depth, which bounds the length of one march step: one step is at least
+    /// |v| (1 - b) / (b steps) long, and (1 - b) / b only shrinks as b grows). The
+    /// factor (1 - 2^-30) covers the double roundings of the step bound.
+    LaneBits GroupLanes(const LaneGroup& q, LaneBits lanes, size_t w, float wmin,
+                        float wmax, const std::vector<uint8_t>& lwin) const {
+        LaneBits keep = 0;
+        const double dmin = double(wmin);
+        double lam = 0, k = 0;
+        const bool exit = ef.usable;
+        if (exit) {
+            if (!(wmax > 0.0f)) return 0;  // every destination gives NaN: ignored
+            lam = double(MinOverSectors(ef, lwin, w, q.mask));
+            const double bmax = double(wmax);
+            k = (1.0 - bmax) / (bmax * double(steps)) * (1.0 - 0x1p-20) * (1.0 - 0x1p-30);
+        }
+        for (LaneBits m = lanes; m; m &= m - 1) {
+            const int l = std::countr_zero(m);
+            const size_t u = size_t(l);
+            if (!(wmin < apex[u])) continue;
+            const double best = double(tb.lane[u].best);
+            if (double(q.distLo[u]) >= best * (dApex[u] - dmin)) continue;
+            if (exit) {
+                const double dLo = double(q.dLo[u]);
+                if (ExitBoundPrunes(ef, dLo, double(q.invD[u]), dmin, lam, dApex[u], best,
+                                    (dLo - 0x1p-22) * k))
+                    continue;
+            }
+            keep |= LaneBits(1) << l;
+        }
+        return keep;
+    }
+
+    /// Every destination of quarter q (window origin wx, wy) for the lanes of `lanes`:
+    /// the same bounds per pair, then the listing. The listing samples exactly the
+    /// destination texel (its float texel coordinate is within W * 2^-22 < 1/2 of the
+    /// centre), so the bounds with its depth b hold for the pair. One march step is
+    /// |v| (1 - b) / (b steps) long (float roundings of v, the scale and the step within
+    /// the factors: OffsetBounds::stepK, and (1 - b) / b rounded down per texel). A pair
+    /// kept is marched with `clear` = its exit-field value (ListingRatio; 1 - 2^-40: the
+    /// double roundings of its comparison of squares).
+    void SearchQuarter(const LaneGroup& q, LaneBits lanes, int wx, int wy) {
         const int W = hf.width, H = hf.height;
-        // Wrapped rows and columns of the tile's destinations.
-        size_t rowBase[kTile];
-        int col[kTile];
-        for (int a = 0; a < t.ny; ++a)
-            rowBase[a] = size_t(WrapNear(wy + a, H)) * size_t(W);
-        for (int a = 0; a < t.nx; ++a) col[a] = WrapNear(wx + a, W);
-        for (int k = 0; k < 4; ++k) {
-            const RelaxedGroup& q = t.quarter[k];
-            if (q.begin == q.end) continue;
-            const size_t w4 = rowBase[(k >> 1) * 4] + size_t(col[(k & 1) * 4]);
-            if (GroupPrunes(q, w4, dw.min4[w4], dw.max4[w4], ef.Lwin4)) continue;
-            for (int o = q.begin; o < q.end; ++o) {
-                const RelaxedOffset& off = groups.offs[size_t(o)];
-                const size_t dst = rowBase[off.ly] + size_t(col[off.lx]);
+        float maxApex = 0;
+        for (LaneBits m = lanes; m; m &= m - 1)
+            maxApex = std::max(maxApex, apex[size_t(std::countr_zero(m))]);
+        for (int a = 0; a < 4; ++a) {
+            const size_t row = size_t(WrapFast(wy + a, H)) * size_t(W);
+            for (int c = 0; c < 4; ++c) {
+                const size_t dst = row + size_t(WrapFast(wx + c, W));
                 const float b = hf.depth[dst];
-                double clear = 0;
-                if (OffsetPrunes(off, dst, b, clear)) continue;
-                Consider(off.dx, off.dy, off.fdx, off.fdy, b, clear);
+                // The listing gives NaN (ignored) for b <= 0, and 1 for b >= the apex.
+                if (!(b > 0.0f) || !(b < maxApex)) continue;
+                const double db = double(b);
+                const int ex = q.ex + c, ey = q.ey + a;
+                const size_t oe = d.Index(ex, ey);
+                const uint8_t* Lp = ef.usable ? &ef.L[dst * kSectors] : nullptr;
+                const double shallow = double(dw.shallow[dst]);
+                for (LaneBits m = lanes; m; m &= m - 1) {
+                    const int l = std::countr_zero(m);
+                    const size_t u = size_t(l);
+                    const size_t o = oe - laneDelta[u];
+                    if (!(b < apex[u])) continue;
+                    const double best = double(tb.lane[u].best);
+                    if (double(d.distLo[o]) >= best * (dApex[u] - db)) continue;
+                    double clear = 0;
+                    if (Lp) {
+                        unsigned mn = 255;
+                        for (unsigned s = d.mask[o]; s; s &= s - 1)
+                            mn = std::min(mn, unsigned(Lp[std::countr_zero(s)]));
+                        const double lp = double(ef.decode[mn]);
+                        if (ExitBoundPrunes(ef, double(d.dist[o]), double(d.invD[o]), db,
+                                            lp, dApex[u], best,
+                                            double(d.stepK[o]) * shallow))
+                            continue;
+                        clear = lp * (1.0 - 0x1p-40);
+                    }
+                    Consider(l, ex - l % kApexSide, ey - l / kApexSide, b, clear);
+                }
             }
         }
     }
 
-    /// The tiles of super-tile si, nearest first, until the distance bound stops them.
-    void SearchSuperTile(size_t si, double reachAll) {
+    /// The minima of the tile at (ti, tj) (texels ti..ti+3, tj..tj+3 inside the map) for
+    /// apexes apexOf(lane), seeded with the minimisers of the tile to its left (`prev`,
+    /// its lanes' offsets; used where found).
+    template <class ApexOf>
+    const TileBest& SearchTile(int ti, int tj, ApexOf apexOf, const TileBest* prev) {
         const int W = hf.width, H = hf.height;
-        const OffsetSuperTile& st = to.supers[si];
-        for (int x = st.first; x < st.last; ++x) {
-            const RelaxedTile& t = groups.tiles[size_t(to.superOrder[size_t(x)])];
-            if (t.all.distLo >= double(rb.best) * reachAll) break;  // sorted by distance
-            const int wx = WrapNear(i + t.all.ox, W), wy = WrapNear(j + t.all.oy, H);
-            const size_t w0 = size_t(wy) * size_t(W) + size_t(wx);
-            if (GroupPrunes(t.all, w0, dw.min8[w0], dw.max8[w0], ef.Lwin)) continue;
-            SearchTile(t, wx, wy);
+        I = ti;
+        J = tj;
+        active = 0;
+        tb = TileBest{};
+        for (int l = 0; l < kLanes; ++l) {
+            const size_t u = size_t(l);
+            const int i = I + l % kApexSide, j = J + l / kApexSide;
+            if (i >= W || j >= H) continue;
+            apex[u] = apexOf(i, j);
+            dApex[u] = double(apex[u]);
+            reach[u] = dApex[u] - double(dmin);
+            sx[u] = (float(i) + 0.5f) / float(W);
+            sy[u] = (float(j) + 0.5f) / float(H);
+            if (apex[u] > dmin) active |= LaneBits(1) << l;
         }
-    }
-
-    /// The minimum for texel (ti, tj) and apex `a`, seeded with the pair `seed` (the left
-    /// neighbour's minimiser, moved one texel) when seedOk.
-    RelaxedBest SearchTexel(int ti, int tj, float a, bool seedOk, int seedDx,
-                            int seedDy) {
-        const int W = hf.width, H = hf.height;
-        i = ti;
-        j = tj;
-        apex = a;
-        rb = RelaxedBest{};
-        // The listing's source position and offsets, the same float values as
-        // RelaxedPairRatio's; the destination depth is the texel's (it samples exactly
-        // it).
-        sx = (float(i) + 0.5f) / float(W);
-        sy = (float(j) + 0.5f) / float(H);
-        if (!(apex > dmin)) return rb;
-        // Seed with the destination that set the left neighbour's minimum (ratios are
-        // spatially coherent, so `best` starts near its final value and the bounds prune
-        // most of the search): any pair of the definition is an upper bound.
-        if (seedOk) {
-            const int dx = seedDx - 1, dy = seedDy;
-            if ((dx != 0 || dy != 0) && dx >= -halfX)
-                Consider(dx, dy, float(dx) / float(W), float(dy) / float(H),
-                         hf.At(Wrap(i + dx, W), Wrap(j + dy, H)));
+        if (!active) return tb;
+        // Seeds: the destinations that set the minima of the left tile's lanes in the
+        // same row, as offsets from this lane (any pair of the definition is an upper
+        // bound).
+        if (prev)
+            for (LaneBits m = active; m; m &= m - 1) {
+                const int l = std::countr_zero(m);
+                const int lx = l % kApexSide, ly = l / kApexSide;
+                for (int px = kApexSide - 1; px >= 0; --px) {
+                    const RelaxedBest& pb = prev->lane[size_t(ly * kApexSide + px)];
+                    if (!pb.found) continue;
+                    const int dx = pb.argDx - (kApexSide + lx - px), dy = pb.argDy;
+                    if ((dx == 0 && dy == 0) || dx < -d.hx || dx > d.hx) continue;
+                    Consider(l, dx, dy,
+                             hf.At(Wrap(I + lx + dx, W), Wrap(J + ly + dy, H)));
+                }
+            }
+        for (size_t si = 0; si < lw.supers.size(); ++si) {
+            const LaneGroup& sg = lw.supers[si];
+            if (double(sg.minDistLo) >= Reach()) break;  // sorted by distance
+            const int sxw = WrapFast(I + sg.ex, W), syw = WrapFast(J + sg.ey, H);
+            const size_t ws = size_t(syw) * size_t(W) + size_t(sxw);
+            const LaneBits ls =
+                GroupLanes(sg, active, ws, dw.min32[ws], dw.max32[ws], ef.Lwin32);
+            if (!ls) continue;
+            for (int ti2 : lw.superTiles[si]) {
+                const LaneGroup& tg = lw.tiles[size_t(ti2)];
+                if (double(tg.minDistLo) >= Reach()) break;  // sorted by distance
+                const int wx = WrapFast(I + tg.ex, W), wy = WrapFast(J + tg.ey, H);
+                const size_t w8 = size_t(wy) * size_t(W) + size_t(wx);
+                const LaneBits lt =
+                    GroupLanes(tg, ls, w8, dw.min8[w8], dw.max8[w8], ef.Lwin);
+                if (!lt) continue;
+                const int tx = ti2 % lw.ntx, ty = ti2 / lw.ntx;
+                for (int k = 0; k < 4; ++k) {
+                    const LaneGroup& qg =
+                        lw.quarters[size_t(2 * ty + (k >> 1)) * size_t(lw.nqx) +
+                                    size_t(2 * tx + (k & 1))];
+                    if (!(qg.minDistLo < kInfF)) continue;
+                    const int qx = WrapFast(wx + (k & 1) * 4, W),
+                              qy = WrapFast(wy + (k >> 1) * 4, H);
+                    const size_t w4 = size_t(qy) * size_t(W) + size_t(qx);
+                    const LaneBits lq =
+                        GroupLanes(qg, lt, w4, dw.min4[w4], dw.max4[w4], ef.Lwin4);
+                    if (lq) SearchQuarter(qg, lq, qx, qy);
+                }
+            }
         }
-        dApex = double(apex);
-        const double reachAll = dApex - double(dmin);
-        for (size_t si = 0; si < to.supers.size(); ++si) {
-            const RelaxedGroup& sb = groups.superBounds[si];
-            if (sb.distLo >= double(rb.best) * reachAll) break;  // sorted by distance
-            const size_t ws = size_t(WrapNear(j + sb.oy, H)) * size_t(W) +
-                              size_t(WrapNear(i + sb.ox, W));
-            if (GroupPrunes(sb, ws, dw.min32[ws], dw.max32[ws], ef.Lwin32)) continue;
-            SearchSuperTile(si, reachAll);
-        }
-        return rb;
+        return tb;
     }
 };
 
-/// The pruned search of every texel and channel, rows in parallel; each texel's search is
-/// seeded by its left neighbour's minimiser (docs/cone_maps.md, section "Exact pruning of
-/// the Listing").
+/// The pruned search of every texel and channel: 4x4 tiles of texels (RelaxedTileSearch),
+/// rows of tiles in parallel; each tile's search is seeded by the minimisers of the tile
+/// to its left (docs/cone_maps.md, section "Exact pruning of the Listing").
 void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geometry& g,
                       float dmin, bool exitField, RelaxedOutput& out) {
     const int W = hf.width, H = hf.height, K = out.K;
@@ -863,7 +981,6 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
     const float inv = PowerOfTwoInverse(p.searchSteps);
     const ExitField ef =
         BuildExitField(hf, p.searchSteps, inv, exitField, dw.max8, dw.max32);
-    TiledOffsets to = MakeTiledOffsets(g, ConeKind::Cone);
     {
         SearchWindows sw;  // depth minima over 8x8 and 32x32 windows (the tiled search's)
         MakeSearchWindows(hf, sw);
@@ -876,28 +993,31 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
         const double b = double(hf.depth[t]);
         if (b > 0) dw.shallow[t] = NonNegFloatAtMost((1.0 - b) / b);
     }
-    RelaxedGroups groups;
-    GroupTileOffsets(to, g, W, H, p.searchSteps, groups);
-    std::vector<Offset>().swap(to.offsets);  // the groups hold them now
-    BoundSuperTiles(to, groups);
+    const DenseOffsets dense = MakeDenseOffsets(g, W, H, p.searchSteps);
+    const LaneWindows lw = MakeLaneWindows(dense);
     ProgressCounter progress(p.progress, H);
+    const int tileRows = (H + kApexSide - 1) / kApexSide;
     tbb::parallel_for(
-        tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& rows) {
-            RelaxedSearch search(hf, to, groups, dw, ef, p.searchSteps, inv, dmin,
-                                 g.halfX);
-            for (int j = rows.begin(); j < rows.end(); ++j, progress.Add(1)) {
-                int seedDx[16] = {}, seedDy[16] = {};
-                bool seedOk[16] = {};
-                for (int i = 0; i < W; ++i)
-                    for (int c = 0; c < K; ++c) {
-                        const RelaxedBest b =
-                            search.SearchTexel(i, j, out.Apex(hf.At(i, j), c), seedOk[c],
-                                               seedDx[c], seedDy[c]);
-                        seedOk[c] = b.found;
-                        seedDx[c] = b.argDx;
-                        seedDy[c] = b.argDy;
-                        out.Store(i, j, c, b.best);
+        tbb::blocked_range<int>(0, tileRows, 1),
+        [&](const tbb::blocked_range<int>& rows) {
+            RelaxedTileSearch search(hf, dense, lw, dw, ef, p.searchSteps, inv, dmin);
+            for (int ty = rows.begin(); ty < rows.end(); ++ty) {
+                const int J = ty * kApexSide;
+                for (int c = 0; c < K; ++c) {
+                    TileBest prev;
+                    for (int I = 0; I < W; I += kApexSide) {
+                        const TileBest& tb = search.SearchTile(
+                            I, J, [&](int i, int j) { return out.Apex(hf.At(i, j), c); },
+                            I > 0 ? &prev : nullptr);
+                        for (int l = 0; l < kLanes; ++l) {
+                            const int i = I + l % kApexSide, j = J + l / kApexSide;
+                            if (i < W && j < H)
+                                out.Store(i, j, c, tb.lane[size_t(l)].best);
+                        }
+                        prev = tb;
                     }
+                }
+                progress.Add(std::min(kApexSide, H - J));
             }
         });
 }
