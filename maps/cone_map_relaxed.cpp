@@ -594,12 +594,11 @@ struct DenseOffsets {
     static constexpr int kPadLo = kApexSide - 1;
     static constexpr int kPadHi = kSuperTile * kTile + kApexSide;
     int hx = 0, hy = 0, pitch = 0;
-    std::vector<float> distLo, dist, invD, stepK;
-    std::vector<SectorBits> mask;
+    std::vector<OffsetBounds> at;  ///< one record per offset: a lane's test reads one line
     size_t Index(int dx, int dy) const {
         return size_t(dy + hy + kPadLo) * size_t(pitch) + size_t(dx + hx + kPadLo);
     }
-    bool Valid(size_t o) const { return distLo[o] < kInfF; }
+    bool Valid(size_t o) const { return at[o].distLo < kInfF; }
 };
 
 DenseOffsets MakeDenseOffsets(const Geometry& g, int W, int H, int steps) {
@@ -608,26 +607,15 @@ DenseOffsets MakeDenseOffsets(const Geometry& g, int W, int H, int steps) {
     t.hy = g.halfY;
     t.pitch = 2 * t.hx + 1 + DenseOffsets::kPadLo + DenseOffsets::kPadHi;
     const int rows = 2 * t.hy + 1 + DenseOffsets::kPadLo + DenseOffsets::kPadHi;
-    const size_t n = size_t(t.pitch) * size_t(rows);
-    t.distLo.assign(n, kInfF);
-    t.dist.assign(n, kInfF);
-    t.invD.assign(n, 0.0f);
-    t.stepK.assign(n, 0.0f);
-    t.mask.assign(n, 0);
-    tbb::parallel_for(
-        tbb::blocked_range<int>(-t.hy, t.hy + 1), [&](const tbb::blocked_range<int>& r) {
-            for (int dy = r.begin(); dy < r.end(); ++dy)
-                for (int dx = -t.hx; dx <= t.hx; ++dx) {
-                    if (dx == 0 && dy == 0) continue;
-                    const OffsetBounds ob = MakeOffsetBounds(g, W, H, steps, dx, dy);
-                    const size_t o = t.Index(dx, dy);
-                    t.distLo[o] = ob.distLo;
-                    t.dist[o] = ob.dist;
-                    t.invD[o] = ob.invD;
-                    t.stepK[o] = ob.stepK;
-                    t.mask[o] = ob.mask;
-                }
-        });
+    t.at.assign(size_t(t.pitch) * size_t(rows), OffsetBounds{kInfF, kInfF, 0.0f, 0.0f, 0});
+    tbb::parallel_for(tbb::blocked_range<int>(-t.hy, t.hy + 1),
+                      [&](const tbb::blocked_range<int>& r) {
+                          for (int dy = r.begin(); dy < r.end(); ++dy)
+                              for (int dx = -t.hx; dx <= t.hx; ++dx)
+                                  if (dx != 0 || dy != 0)
+                                      t.at[t.Index(dx, dy)] =
+                                          MakeOffsetBounds(g, W, H, steps, dx, dy);
+                      });
     return t;
 }
 
@@ -688,12 +676,13 @@ LaneWindows MakeLaneWindows(const DenseOffsets& d) {
                             for (int b = 0; b < 4; ++b) {
                                 const size_t o = d.Index(q.ex + b - lx, q.ey + a - ly);
                                 if (!d.Valid(o)) continue;
+                                const OffsetBounds& ob = d.at[o];
                                 q.distLo[size_t(l)] =
-                                    std::min(q.distLo[size_t(l)], d.distLo[o]);
-                                q.dLo[size_t(l)] = std::min(q.dLo[size_t(l)], d.dist[o]);
+                                    std::min(q.distLo[size_t(l)], ob.distLo);
+                                q.dLo[size_t(l)] = std::min(q.dLo[size_t(l)], ob.dist);
                                 q.invD[size_t(l)] =
-                                    std::min(q.invD[size_t(l)], d.invD[o]);
-                                q.mask |= d.mask[o];
+                                    std::min(q.invD[size_t(l)], ob.invD);
+                                q.mask |= ob.mask;
                             }
                         q.minDistLo = std::min(q.minDistLo, q.distLo[size_t(l)]);
                     }
@@ -872,16 +861,17 @@ struct RelaxedTileSearch {
                     const size_t o = oe - laneDelta[u];
                     if (!(b < apex[u])) continue;
                     const double best = double(tb.lane[u].best);
-                    if (double(d.distLo[o]) >= best * (dApex[u] - db)) continue;
+                    const OffsetBounds& ob = d.at[o];
+                    if (double(ob.distLo) >= best * (dApex[u] - db)) continue;
                     double clear = 0;
                     if (Lp) {
                         unsigned mn = 255;
-                        for (unsigned s = d.mask[o]; s; s &= s - 1)
+                        for (unsigned s = ob.mask; s; s &= s - 1)
                             mn = std::min(mn, unsigned(Lp[std::countr_zero(s)]));
                         const double lp = double(ef.decode[mn]);
-                        if (ExitBoundPrunes(ef, double(d.dist[o]), double(d.invD[o]), db,
+                        if (ExitBoundPrunes(ef, double(ob.dist), double(ob.invD), db,
                                             lp, dApex[u], best,
-                                            double(d.stepK[o]) * shallow))
+                                            double(ob.stepK) * shallow))
                             continue;
                         clear = lp * (1.0 - 0x1p-40);
                     }
