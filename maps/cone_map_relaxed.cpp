@@ -569,7 +569,9 @@ struct RelaxedBest {
 /// texel's own depth b, rounded down (0 where b = 0).
 struct DepthWindows {
     std::vector<float> min4, min8, min32;
-    std::vector<float> max4, max8, max32;
+    /// max[k]: the greatest depth over the 2^(k+1)-square windows, k = 0..6 (2x2 to
+    /// 128x128; the groups use 4, 8 and 32, AheadPrunes all of them).
+    std::array<std::vector<float>, 7> max;
     std::vector<float> shallow;
 };
 
@@ -594,7 +596,8 @@ struct DenseOffsets {
     static constexpr int kPadLo = kApexSide - 1;
     static constexpr int kPadHi = kSuperTile * kTile + kApexSide;
     int hx = 0, hy = 0, pitch = 0;
-    std::vector<OffsetBounds> at;  ///< one record per offset: a lane's test reads one line
+    std::vector<OffsetBounds>
+        at;  ///< one record per offset: a lane's test reads one line
     size_t Index(int dx, int dy) const {
         return size_t(dy + hy + kPadLo) * size_t(pitch) + size_t(dx + hx + kPadLo);
     }
@@ -607,15 +610,15 @@ DenseOffsets MakeDenseOffsets(const Geometry& g, int W, int H, int steps) {
     t.hy = g.halfY;
     t.pitch = 2 * t.hx + 1 + DenseOffsets::kPadLo + DenseOffsets::kPadHi;
     const int rows = 2 * t.hy + 1 + DenseOffsets::kPadLo + DenseOffsets::kPadHi;
-    t.at.assign(size_t(t.pitch) * size_t(rows), OffsetBounds{kInfF, kInfF, 0.0f, 0.0f, 0});
-    tbb::parallel_for(tbb::blocked_range<int>(-t.hy, t.hy + 1),
-                      [&](const tbb::blocked_range<int>& r) {
-                          for (int dy = r.begin(); dy < r.end(); ++dy)
-                              for (int dx = -t.hx; dx <= t.hx; ++dx)
-                                  if (dx != 0 || dy != 0)
-                                      t.at[t.Index(dx, dy)] =
-                                          MakeOffsetBounds(g, W, H, steps, dx, dy);
-                      });
+    t.at.assign(size_t(t.pitch) * size_t(rows),
+                OffsetBounds{kInfF, kInfF, 0.0f, 0.0f, 0});
+    tbb::parallel_for(
+        tbb::blocked_range<int>(-t.hy, t.hy + 1), [&](const tbb::blocked_range<int>& r) {
+            for (int dy = r.begin(); dy < r.end(); ++dy)
+                for (int dx = -t.hx; dx <= t.hx; ++dx)
+                    if (dx != 0 || dy != 0)
+                        t.at[t.Index(dx, dy)] = MakeOffsetBounds(g, W, H, steps, dx, dy);
+        });
     return t;
 }
 
@@ -680,8 +683,7 @@ LaneWindows MakeLaneWindows(const DenseOffsets& d) {
                                 q.distLo[size_t(l)] =
                                     std::min(q.distLo[size_t(l)], ob.distLo);
                                 q.dLo[size_t(l)] = std::min(q.dLo[size_t(l)], ob.dist);
-                                q.invD[size_t(l)] =
-                                    std::min(q.invD[size_t(l)], ob.invD);
+                                q.invD[size_t(l)] = std::min(q.invD[size_t(l)], ob.invD);
                                 q.mask |= ob.mask;
                             }
                         q.minDistLo = std::min(q.minDistLo, q.distLo[size_t(l)]);
@@ -830,6 +832,36 @@ struct RelaxedTileSearch {
         return keep;
     }
 
+    /// The exit bound carried further by the depth maxima ahead of the destination (x, y)
+    /// of a pair at offset (dx, dy) whose march travels at least `lam` (uv) before it can
+    /// stop (docs/cone_maps.md, section "Windows ahead"): the march only moves away from
+    /// the source, so it samples the k x k window of cells that starts at the destination
+    /// and extends along the offset's signs until it has travelled (k - 1/2) texels; a
+    /// window whose deepest cell is not deeper than the march's z after `lam` cannot stop
+    /// it, so the march travels at least that far. Windows of 4, 8 and 32 in turn, each
+    /// tested with the travel the smaller one proved.
+    RS_INLINE bool AheadPrunes(int dx, int dy, int x, int y, double b,
+                               const OffsetBounds& ob, double lam, double apexD,
+                               double best) const {
+        if (!(lam > 0)) return false;
+        const int W = hf.width, H = hf.height;
+        const double m = b * double(ob.invD);
+        const double texel = std::min(1.0 / double(W), 1.0 / double(H));
+        for (size_t level = 0; level < dw.max.size(); ++level) {
+            const int k = 2 << level;
+            const int x0 = dx >= 0 ? x : WrapFast(x - (k - 1), W);
+            const int y0 = dy >= 0 ? y : WrapFast(y - (k - 1), H);
+            const double deepest =
+                double(dw.max[level][size_t(y0) * size_t(W) + size_t(x0)]);
+            if (!(deepest <= b + lam * m - ef.eta - 0x1p-40)) return false;
+            lam = std::max(lam, (double(k) - 0.5) * texel - 4.0 * ef.eps);
+            if (ExitBoundPrunes(ef, double(ob.dist), double(ob.invD), b,
+                                lam + 2.0 * ef.eps, apexD, best))
+                return true;
+        }
+        return false;
+    }
+
     /// Every destination of quarter q (window origin wx, wy) for the lanes of `lanes`:
     /// the same bounds per pair, then the listing. The listing samples exactly the
     /// destination texel (its float texel coordinate is within W * 2^-22 < 1/2 of the
@@ -844,9 +876,11 @@ struct RelaxedTileSearch {
         for (LaneBits m = lanes; m; m &= m - 1)
             maxApex = std::max(maxApex, apex[size_t(std::countr_zero(m))]);
         for (int a = 0; a < 4; ++a) {
-            const size_t row = size_t(WrapFast(wy + a, H)) * size_t(W);
+            const int rowIndex = WrapFast(wy + a, H);
+            const size_t row = size_t(rowIndex) * size_t(W);
             for (int c = 0; c < 4; ++c) {
-                const size_t dst = row + size_t(WrapFast(wx + c, W));
+                const int col = WrapFast(wx + c, W);
+                const size_t dst = row + size_t(col);
                 const float b = hf.depth[dst];
                 // The listing gives NaN (ignored) for b <= 0, and 1 for b >= the apex.
                 if (!(b > 0.0f) || !(b < maxApex)) continue;
@@ -869,9 +903,14 @@ struct RelaxedTileSearch {
                         for (unsigned s = ob.mask; s; s &= s - 1)
                             mn = std::min(mn, unsigned(Lp[std::countr_zero(s)]));
                         const double lp = double(ef.decode[mn]);
-                        if (ExitBoundPrunes(ef, double(ob.dist), double(ob.invD), db,
-                                            lp, dApex[u], best,
-                                            double(ob.stepK) * shallow))
+                        const double stepLo = double(ob.stepK) * shallow;
+                        if (ExitBoundPrunes(ef, double(ob.dist), double(ob.invD), db, lp,
+                                            dApex[u], best, stepLo))
+                            continue;
+                        const int dxo = ex - l % kApexSide, dyo = ey - l / kApexSide;
+                        if (AheadPrunes(dxo, dyo, col, rowIndex, db, ob,
+                                        std::max(lp - 2.0 * ef.eps, stepLo), dApex[u],
+                                        best))
                             continue;
                         clear = lp * (1.0 - 0x1p-40);
                     }
@@ -925,7 +964,7 @@ struct RelaxedTileSearch {
             const int sxw = WrapFast(I + sg.ex, W), syw = WrapFast(J + sg.ey, H);
             const size_t ws = size_t(syw) * size_t(W) + size_t(sxw);
             const LaneBits ls =
-                GroupLanes(sg, active, ws, dw.min32[ws], dw.max32[ws], ef.Lwin32);
+                GroupLanes(sg, active, ws, dw.min32[ws], dw.max[4][ws], ef.Lwin32);
             if (!ls) continue;
             for (int ti2 : lw.superTiles[si]) {
                 const LaneGroup& tg = lw.tiles[size_t(ti2)];
@@ -933,7 +972,7 @@ struct RelaxedTileSearch {
                 const int wx = WrapFast(I + tg.ex, W), wy = WrapFast(J + tg.ey, H);
                 const size_t w8 = size_t(wy) * size_t(W) + size_t(wx);
                 const LaneBits lt =
-                    GroupLanes(tg, ls, w8, dw.min8[w8], dw.max8[w8], ef.Lwin);
+                    GroupLanes(tg, ls, w8, dw.min8[w8], dw.max[2][w8], ef.Lwin);
                 if (!lt) continue;
                 const int tx = ti2 % lw.ntx, ty = ti2 / lw.ntx;
                 for (int k = 0; k < 4; ++k) {
@@ -945,7 +984,7 @@ struct RelaxedTileSearch {
                               qy = WrapFast(wy + (k >> 1) * 4, H);
                     const size_t w4 = size_t(qy) * size_t(W) + size_t(qx);
                     const LaneBits lq =
-                        GroupLanes(qg, lt, w4, dw.min4[w4], dw.max4[w4], ef.Lwin4);
+                        GroupLanes(qg, lt, w4, dw.min4[w4], dw.max[1][w4], ef.Lwin4);
                     if (lq) SearchQuarter(qg, lq, qx, qy);
                 }
             }
@@ -961,16 +1000,16 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
                       float dmin, bool exitField, RelaxedOutput& out) {
     const int W = hf.width, H = hf.height, K = out.K;
     // Depth maxima over 4x4, 8x8 and 32x32 windows (the exit field's build and the
-    // group bounds both use them).
+    // group bounds both use them; the others, for AheadPrunes, after the exit field).
     DepthWindows dw;
-    dw.max4 = WindowMaxima(hf.depth, W, H, 4);
-    dw.max8 = WindowMaxima(dw.max4, W, H, 2, 4);
-    dw.max32 = WindowMaxima(dw.max8, W, H, kSuperTile, kTile);
+    dw.max[1] = WindowMaxima(hf.depth, W, H, 4);
+    dw.max[2] = WindowMaxima(dw.max[1], W, H, 2, 4);
+    dw.max[4] = WindowMaxima(dw.max[2], W, H, kSuperTile, kTile);
     // The exit field before the offsets and the other windows: its build's scratch is
     // freed before they are made (peak memory at 2048²).
     const float inv = PowerOfTwoInverse(p.searchSteps);
     const ExitField ef =
-        BuildExitField(hf, p.searchSteps, inv, exitField, dw.max8, dw.max32);
+        BuildExitField(hf, p.searchSteps, inv, exitField, dw.max[2], dw.max[4]);
     {
         SearchWindows sw;  // depth minima over 8x8 and 32x32 windows (the tiled search's)
         MakeSearchWindows(hf, sw);
@@ -978,6 +1017,10 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
         dw.min32 = std::move(sw.win32);
     }
     dw.min4 = WindowMinima(hf.depth, W, H, 1, 4);
+    dw.max[0] = WindowMaxima(hf.depth, W, H, 2);
+    dw.max[3] = WindowMaxima(dw.max[2], W, H, 2, 8);
+    dw.max[5] = WindowMaxima(dw.max[4], W, H, 2, 32);
+    dw.max[6] = WindowMaxima(dw.max[5], W, H, 2, 64);
     dw.shallow.assign(hf.depth.size(), 0.0f);
     for (size_t t = 0; t < dw.shallow.size(); ++t) {
         const double b = double(hf.depth[t]);
