@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <numbers>
 
 #include "core/error.h"
 #include "maps/cone_map_detail.h"
@@ -253,6 +254,59 @@ TEST(ConeMap, RelaxedFastEqualsListingBruteForceAt64And128) {
         ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed),
                        GenerateConeMapBruteForce(hf, ConeKind::Relaxed),
                        hf.name + " 128");
+}
+
+TEST(ConeMap, RelaxedWindowsAheadMatchBruteForce) {
+    // Smooth periodic maps, whose marches travel far through cells no deeper than the
+    // ray: the search proves that travel with the depth maxima of windows up to 128x128
+    // ahead of the destination (AheadPrunes), and the brute force checks every pair it
+    // skips.
+    const auto waves = [](int w, int h, double amp, int periods) {
+        return testing::MakeField(
+            w, h,
+            [=](int i, int j) {
+                const double tau = 2.0 * std::numbers::pi * periods;
+                return float(0.5 + amp * std::sin(tau * (i + 0.5) / w) *
+                                       std::cos(tau * (j + 0.5) / h));
+            },
+            "waves");
+    };
+    // A ribbon whose only pair below 1 travels 40 texels: the apex column (x = 10, depth
+    // 1) sees one destination column (x = 23, depth 0.1) across cells at depth 0 (never
+    // destinations: the listing's NaN; never deeper than the ray), and its march stops in
+    // the trench at x = 63..70 (depth 1), 40 texels on, at ratio ~0.70. The windows ahead
+    // prove a travel of 31.5 texels (the 32x32 window holds no deeper cell) but not more
+    // (the 64x64 one holds the trench); along x and y, forwards and mirrored.
+    const auto ribbon = [](bool alongY, bool mirrored) {
+        const int n = 128, across = 4;
+        return testing::MakeField(
+            alongY ? across : n, alongY ? n : across,
+            [=](int i, int j) {
+                int x = alongY ? j : i;
+                if (mirrored) x = n - 1 - x;
+                if (x == 10) return 1.0f;
+                if (x == 23) return 0.1f;
+                if (x >= 63 && x <= 70) return 1.0f;
+                return 0.0f;
+            },
+            "ribbon");
+    };
+    const ConeMap far = GenerateConeMap(ribbon(false, false), ConeKind::Relaxed);
+    EXPECT_NEAR(far.values[10], 0.70, 0.02);  // the apex column's only pair below 1
+    for (bool alongY : {false, true})
+        for (bool mirrored : {false, true}) {
+            const DepthField hf = ribbon(alongY, mirrored);
+            ExpectBitEqual(GenerateConeMap(hf, ConeKind::Relaxed),
+                           GenerateConeMapBruteForce(hf, ConeKind::Relaxed),
+                           std::string("ribbon") + (alongY ? " along y" : " along x") +
+                               (mirrored ? " mirrored" : ""));
+        }
+    for (const DepthField& hf :
+         {waves(64, 64, 0.3, 1), waves(96, 80, 0.1, 1), waves(72, 72, 0.4, 2)})
+        ExpectBitEqual(
+            GenerateConeMap(hf, ConeKind::Relaxed),
+            GenerateConeMapBruteForce(hf, ConeKind::Relaxed),
+            hf.name + " " + std::to_string(hf.width) + "x" + std::to_string(hf.height));
 }
 
 TEST(ConeMap, RelaxedVariantsMatchTheirBruteForce) {
