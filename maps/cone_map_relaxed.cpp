@@ -832,6 +832,27 @@ struct RelaxedTileSearch {
         return keep;
     }
 
+    /// How often AheadPrunes pruned lately: where it rarely does (steep, rough content,
+    /// e.g. around the hemisphere of `shapes`) it costs more than the marches it saves,
+    /// so it is then tried on one pair in 16 only, until it pays again. Pruning fewer
+    /// pairs never changes a minimum, so the maps do not depend on it.
+    struct AheadRate {
+        uint32_t tried = 0, pruned = 0, skip = 0;
+        void Count(bool p) {
+            ++tried;
+            pruned += p ? 1u : 0u;
+            if (tried == 256) {  // a new window of 256 tries
+                tried /= 2;
+                pruned /= 2;
+            }
+        }
+        bool Paying() const { return pruned * 4 >= tried; }
+    } ahead;
+    bool TryAhead() {
+        if (ahead.Paying()) return true;
+        return (++ahead.skip & 15u) == 0;
+    }
+
     /// The exit bound carried further by the depth maxima ahead of the destination (x, y)
     /// of a pair at offset (dx, dy) whose march travels at least `lam` (uv) before it can
     /// stop (docs/cone_maps.md, section "Windows ahead"): the march only moves away from
@@ -847,16 +868,38 @@ struct RelaxedTileSearch {
         const int W = hf.width, H = hf.height;
         const double m = b * double(ob.invD);
         const double texel = std::min(1.0 / double(W), 1.0 / double(H));
-        for (size_t level = 0; level < dw.max.size(); ++level) {
+        // The travel the exit bound needs to prune the pair, in real numbers: it only
+        // picks the first window worth the bound (and skips pairs no window can prune);
+        // the bound itself is evaluated as always.
+        const double c = 1.0 - 0x1p-20;
+        const double need =
+            (best * (apexD - b + ef.eta) - (double(ob.dist) - ef.eps) * c) /
+            (c + best * m) * (1.0 - 0x1p-30);
+        const size_t levels = dw.max.size();
+        size_t first = 0;
+        while (first < levels && (double(2 << first) - 0.5) * texel - 4.0 * ef.eps < need)
+            ++first;
+        if (first == levels) return false;
+        const auto deepestAhead = [&](size_t level) {
             const int k = 2 << level;
             const int x0 = dx >= 0 ? x : WrapFast(x - (k - 1), W);
             const int y0 = dy >= 0 ? y : WrapFast(y - (k - 1), H);
-            const double deepest =
-                double(dw.max[level][size_t(y0) * size_t(W) + size_t(x0)]);
-            if (!(deepest <= b + lam * m - ef.eta - 0x1p-40)) return false;
+            return double(dw.max[level][size_t(y0) * size_t(W) + size_t(x0)]);
+        };
+        // That window first, against the largest z the windows before it can prove: one
+        // load rejects most pairs.
+        if (first > 0) {
+            const double lamBefore =
+                std::max(lam, (double(1 << first) - 0.5) * texel - 4.0 * ef.eps);
+            if (!(deepestAhead(first) <= b + lamBefore * m - ef.eta - 0x1p-40))
+                return false;
+        }
+        for (size_t level = 0; level < levels; ++level) {
+            const int k = 2 << level;
+            if (!(deepestAhead(level) <= b + lam * m - ef.eta - 0x1p-40)) return false;
             lam = std::max(lam, (double(k) - 0.5) * texel - 4.0 * ef.eps);
-            if (ExitBoundPrunes(ef, double(ob.dist), double(ob.invD), b,
-                                lam + 2.0 * ef.eps, apexD, best))
+            if (level >= first && ExitBoundPrunes(ef, double(ob.dist), double(ob.invD), b,
+                                                  lam + 2.0 * ef.eps, apexD, best))
                 return true;
         }
         return false;
@@ -908,10 +951,13 @@ struct RelaxedTileSearch {
                                             dApex[u], best, stepLo))
                             continue;
                         const int dxo = ex - l % kApexSide, dyo = ey - l / kApexSide;
-                        if (AheadPrunes(dxo, dyo, col, rowIndex, db, ob,
-                                        std::max(lp - 2.0 * ef.eps, stepLo), dApex[u],
-                                        best))
-                            continue;
+                        if (TryAhead()) {
+                            const bool pruned = AheadPrunes(
+                                dxo, dyo, col, rowIndex, db, ob,
+                                std::max(lp - 2.0 * ef.eps, stepLo), dApex[u], best);
+                            ahead.Count(pruned);
+                            if (pruned) continue;
+                        }
                         clear = lp * (1.0 - 0x1p-40);
                     }
                     Consider(l, ex - l % kApexSide, ey - l / kApexSide, b, clear);
