@@ -905,6 +905,18 @@ struct RelaxedTileSearch {
         return false;
     }
 
+    /// GroupLanes for window g of the tile, with the depth minima, maxima and exit minima
+    /// over windows of its size; (wx, wy) is its origin in the map (wrapped).
+    LaneBits WindowLanes(const LaneGroup& g, LaneBits lanes,
+                         const std::vector<float>& mins, const std::vector<float>& maxs,
+                         const std::vector<uint8_t>& lwin, int& wx, int& wy) const {
+        const int W = hf.width, H = hf.height;
+        wx = WrapFast(I + g.ex, W);
+        wy = WrapFast(J + g.ey, H);
+        const size_t w = size_t(wy) * size_t(W) + size_t(wx);
+        return GroupLanes(g, lanes, w, mins[w], maxs[w], lwin);
+    }
+
     /// Every destination of quarter q (window origin wx, wy) for the lanes of `lanes`:
     /// the same bounds per pair, then the listing. The listing samples exactly the
     /// destination texel (its float texel coordinate is within W * 2^-22 < 1/2 of the
@@ -1007,20 +1019,18 @@ struct RelaxedTileSearch {
         for (size_t si = 0; si < lw.supers.size(); ++si) {
             const LaneGroup& sg = lw.supers[si];
             if (double(sg.minDistLo) >= Reach()) break;  // sorted by distance
-            const int sxw = WrapFast(I + sg.ex, W), syw = WrapFast(J + sg.ey, H);
-            const size_t ws = size_t(syw) * size_t(W) + size_t(sxw);
+            int sx0 = 0, sy0 = 0;
             const LaneBits ls =
-                GroupLanes(sg, active, ws, dw.min32[ws], dw.max[4][ws], ef.Lwin32);
+                WindowLanes(sg, active, dw.min32, dw.max[4], ef.Lwin32, sx0, sy0);
             if (!ls) continue;
-            for (int ti2 : lw.superTiles[si]) {
-                const LaneGroup& tg = lw.tiles[size_t(ti2)];
+            for (int tileIndex : lw.superTiles[si]) {
+                const LaneGroup& tg = lw.tiles[size_t(tileIndex)];
                 if (double(tg.minDistLo) >= Reach()) break;  // sorted by distance
-                const int wx = WrapFast(I + tg.ex, W), wy = WrapFast(J + tg.ey, H);
-                const size_t w8 = size_t(wy) * size_t(W) + size_t(wx);
+                int wx = 0, wy = 0;
                 const LaneBits lt =
-                    GroupLanes(tg, ls, w8, dw.min8[w8], dw.max[2][w8], ef.Lwin);
+                    WindowLanes(tg, ls, dw.min8, dw.max[2], ef.Lwin, wx, wy);
                 if (!lt) continue;
-                const int tx = ti2 % lw.ntx, ty = ti2 / lw.ntx;
+                const int tx = tileIndex % lw.ntx, ty = tileIndex / lw.ntx;
                 for (int k = 0; k < 4; ++k) {
                     const LaneGroup& qg =
                         lw.quarters[size_t(2 * ty + (k >> 1)) * size_t(lw.nqx) +
