@@ -651,8 +651,12 @@ struct LaneGroup {
 /// sorted by distance (empty windows left out).
 struct LaneWindows {
     int nqx = 0, nqy = 0, ntx = 0;
-    std::vector<LaneGroup> quarters, tiles, supers;
-    std::vector<std::vector<int>> superTiles;  ///< per super-tile: tile indices
+    std::vector<LaneGroup> quarters, tiles;
+    struct Super {
+        LaneGroup bounds;
+        std::vector<int> tiles;  ///< indices into `tiles`
+    };
+    std::vector<Super> supers;
 };
 
 LaneWindows MakeLaneWindows(const DenseOffsets& d) {
@@ -719,22 +723,12 @@ LaneWindows MakeLaneWindows(const DenseOffsets& d) {
             std::stable_sort(members.begin(), members.end(), [&](int a, int b) {
                 return lw.tiles[size_t(a)].minDistLo < lw.tiles[size_t(b)].minDistLo;
             });
-            lw.supers.push_back(s);
-            lw.superTiles.push_back(std::move(members));
+            lw.supers.push_back({s, std::move(members)});
         }
-    std::vector<size_t> order(lw.supers.size());
-    for (size_t k = 0; k < order.size(); ++k) order[k] = k;
-    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-        return lw.supers[a].minDistLo < lw.supers[b].minDistLo;
-    });
-    std::vector<LaneGroup> supers(order.size());
-    std::vector<std::vector<int>> superTiles(order.size());
-    for (size_t k = 0; k < order.size(); ++k) {
-        supers[k] = lw.supers[order[k]];
-        superTiles[k] = std::move(lw.superTiles[order[k]]);
-    }
-    lw.supers = std::move(supers);
-    lw.superTiles = std::move(superTiles);
+    std::stable_sort(lw.supers.begin(), lw.supers.end(),
+                     [](const LaneWindows::Super& a, const LaneWindows::Super& b) {
+                         return a.bounds.minDistLo < b.bounds.minDistLo;
+                     });
     return lw;
 }
 
@@ -859,8 +853,8 @@ struct RelaxedTileSearch {
     /// the source, so it samples the k x k window of cells that starts at the destination
     /// and extends along the offset's signs until it has travelled (k - 1/2) texels; a
     /// window whose deepest cell is not deeper than the march's z after `lam` cannot stop
-    /// it, so the march travels at least that far. Windows of 4, 8 and 32 in turn, each
-    /// tested with the travel the smaller one proved.
+    /// it, so the march travels at least that far. Windows of 2 to 128 texels in turn,
+    /// each tested with the travel the smaller one proved.
     RS_INLINE bool AheadPrunes(int dx, int dy, int x, int y, double b,
                                const OffsetBounds& ob, double lam, double apexD,
                                double best) const {
@@ -942,7 +936,6 @@ struct RelaxedTileSearch {
                 const double db = double(b);
                 const int ex = q.ex + c, ey = q.ey + a;
                 const size_t oe = d.Index(ex, ey);
-                const uint8_t* Lp = ef.usable ? &ef.L[dst * kSectors] : nullptr;
                 const double shallow = double(dw.shallow[dst]);
                 for (LaneBits m = lanes; m; m &= m - 1) {
                     const int l = std::countr_zero(m);
@@ -952,17 +945,14 @@ struct RelaxedTileSearch {
                     const double best = double(tb.lane[u].best);
                     const OffsetBounds& ob = d.at[o];
                     if (double(ob.distLo) >= best * (dApex[u] - db)) continue;
+                    const int dxo = ex - l % kApexSide, dyo = ey - l / kApexSide;
                     double clear = 0;
-                    if (Lp) {
-                        unsigned mn = 255;
-                        for (unsigned s = ob.mask; s; s &= s - 1)
-                            mn = std::min(mn, unsigned(Lp[std::countr_zero(s)]));
-                        const double lp = double(ef.decode[mn]);
+                    if (ef.usable) {
+                        const double lp = double(MinOverSectors(ef, ef.L, dst, ob.mask));
                         const double stepLo = double(ob.stepK) * shallow;
                         if (ExitBoundPrunes(ef, double(ob.dist), double(ob.invD), db, lp,
                                             dApex[u], best, stepLo))
                             continue;
-                        const int dxo = ex - l % kApexSide, dyo = ey - l / kApexSide;
                         if (TryAhead()) {
                             const bool pruned = AheadPrunes(
                                 dxo, dyo, col, rowIndex, db, ob,
@@ -972,7 +962,7 @@ struct RelaxedTileSearch {
                         }
                         clear = lp * (1.0 - 0x1p-40);
                     }
-                    Consider(l, ex - l % kApexSide, ey - l / kApexSide, b, clear);
+                    Consider(l, dxo, dyo, b, clear);
                 }
             }
         }
@@ -1016,14 +1006,14 @@ struct RelaxedTileSearch {
                              hf.At(Wrap(I + lx + dx, W), Wrap(J + ly + dy, H)));
                 }
             }
-        for (size_t si = 0; si < lw.supers.size(); ++si) {
-            const LaneGroup& sg = lw.supers[si];
+        for (const LaneWindows::Super& super : lw.supers) {
+            const LaneGroup& sg = super.bounds;
             if (double(sg.minDistLo) >= Reach()) break;  // sorted by distance
             int sx0 = 0, sy0 = 0;
             const LaneBits ls =
                 WindowLanes(sg, active, dw.min32, dw.max[4], ef.Lwin32, sx0, sy0);
             if (!ls) continue;
-            for (int tileIndex : lw.superTiles[si]) {
+            for (int tileIndex : super.tiles) {
                 const LaneGroup& tg = lw.tiles[size_t(tileIndex)];
                 if (double(tg.minDistLo) >= Reach()) break;  // sorted by distance
                 int wx = 0, wy = 0;
@@ -1036,11 +1026,9 @@ struct RelaxedTileSearch {
                         lw.quarters[size_t(2 * ty + (k >> 1)) * size_t(lw.nqx) +
                                     size_t(2 * tx + (k & 1))];
                     if (!(qg.minDistLo < kInfF)) continue;
-                    const int qx = WrapFast(wx + (k & 1) * 4, W),
-                              qy = WrapFast(wy + (k >> 1) * 4, H);
-                    const size_t w4 = size_t(qy) * size_t(W) + size_t(qx);
+                    int qx = 0, qy = 0;
                     const LaneBits lq =
-                        GroupLanes(qg, lt, w4, dw.min4[w4], dw.max[1][w4], ef.Lwin4);
+                        WindowLanes(qg, lt, dw.min4, dw.max[1], ef.Lwin4, qx, qy);
                     if (lq) SearchQuarter(qg, lq, qx, qy);
                 }
             }
