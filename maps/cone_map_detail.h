@@ -264,9 +264,12 @@ float RelaxedPairRatio(const DepthField& hf, int ti, int tj, int dx, int dy, int
 /// StackedApex). brute = every pair, no pruning (the oracle); otherwise the exact pruned
 /// search, which uses the exit-field bound where its float argument holds (maps up to
 /// ~2040 texels a side at 4096 steps, ~58,000 at 128); exitField = false forces the
-/// search without it (tests).
+/// search without it, aheadEveryPair = true tries the windows ahead on every pair the
+/// exit bound keeps (where they rarely prune the search tries them on one pair in 16)
+/// (tests).
 ConeMap RelaxedListingMap(const DepthField& hf, const ConeMapParams& p, bool brute,
-                          ConeKind outKind, bool exitField = true);
+                          ConeKind outKind, bool exitField = true,
+                          bool aheadEveryPair = false);
 
 /// Apex depth of stacked cone k of K: d * (K - k) / K (k = 0: the surface point).
 inline float StackedApex(float d, int k, int K) { return d * (float(K - k) / float(K)); }

@@ -842,8 +842,9 @@ struct RelaxedTileSearch {
         }
         bool Paying() const { return pruned * 4 >= tried; }
     } ahead;
+    bool aheadEveryPair = false;  ///< tests: AheadPrunes on every pair, paying or not
     bool TryAhead() {
-        if (ahead.Paying()) return true;
+        if (aheadEveryPair || ahead.Paying()) return true;
         return (++ahead.skip & 15u) == 0;
     }
 
@@ -869,10 +870,13 @@ struct RelaxedTileSearch {
         const double need =
             (best * (apexD - b + ef.eta) - (double(ob.dist) - ef.eps) * c) /
             (c + best * m) * (1.0 - 0x1p-30);
+        // The travel a clear window of (2 << level) texels proves.
+        const auto proven = [&](size_t level) {
+            return (double(2 << level) - 0.5) * texel - 4.0 * ef.eps;
+        };
         const size_t levels = dw.max.size();
         size_t first = 0;
-        while (first < levels && (double(2 << first) - 0.5) * texel - 4.0 * ef.eps < need)
-            ++first;
+        while (first < levels && proven(first) < need) ++first;
         if (first == levels) return false;
         const auto deepestAhead = [&](size_t level) {
             const int k = 2 << level;
@@ -883,15 +887,13 @@ struct RelaxedTileSearch {
         // That window first, against the largest z the windows before it can prove: one
         // load rejects most pairs.
         if (first > 0) {
-            const double lamBefore =
-                std::max(lam, (double(1 << first) - 0.5) * texel - 4.0 * ef.eps);
+            const double lamBefore = std::max(lam, proven(first - 1));
             if (!(deepestAhead(first) <= b + lamBefore * m - ef.eta - 0x1p-40))
                 return false;
         }
         for (size_t level = 0; level < levels; ++level) {
-            const int k = 2 << level;
             if (!(deepestAhead(level) <= b + lam * m - ef.eta - 0x1p-40)) return false;
-            lam = std::max(lam, (double(k) - 0.5) * texel - 4.0 * ef.eps);
+            lam = std::max(lam, proven(level));
             if (level >= first && ExitBoundPrunes(ef, double(ob.dist), double(ob.invD), b,
                                                   lam + 2.0 * ef.eps, apexD, best))
                 return true;
@@ -1041,7 +1043,8 @@ struct RelaxedTileSearch {
 /// rows of tiles in parallel; each tile's search is seeded by the minimisers of the tile
 /// to its left (docs/cone_maps.md, section "Exact pruning of the Listing").
 void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geometry& g,
-                      float dmin, bool exitField, RelaxedOutput& out) {
+                      float dmin, bool exitField, bool aheadEveryPair,
+                      RelaxedOutput& out) {
     const int W = hf.width, H = hf.height, K = out.K;
     // Depth maxima over 4x4, 8x8 and 32x32 windows (the exit field's build and the
     // group bounds both use them; the others, for AheadPrunes, after the exit field).
@@ -1078,6 +1081,7 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
         tbb::blocked_range<int>(0, tileRows, 1),
         [&](const tbb::blocked_range<int>& rows) {
             RelaxedTileSearch search(hf, dense, lw, dw, ef, p.searchSteps, inv, dmin);
+            search.aheadEveryPair = aheadEveryPair;
             for (int ty = rows.begin(); ty < rows.end(); ++ty) {
                 const int J = ty * kApexSide;
                 for (int c = 0; c < K; ++c) {
@@ -1102,7 +1106,7 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
 }  // namespace
 
 ConeMap RelaxedListingMap(const DepthField& hf, const ConeMapParams& p, bool brute,
-                          ConeKind outKind, bool exitField) {
+                          ConeKind outKind, bool exitField, bool aheadEveryPair) {
     const float dmin = CheckedMinDepth(hf);
     if (hf.width > (1 << 20) || hf.height > (1 << 20))
         throw Error(
@@ -1124,7 +1128,7 @@ ConeMap RelaxedListingMap(const DepthField& hf, const ConeMapParams& p, bool bru
     if (brute)
         BruteRelaxedMap(hf, p, g, out);
     else
-        PrunedRelaxedMap(hf, p, g, dmin, exitField, out);
+        PrunedRelaxedMap(hf, p, g, dmin, exitField, aheadEveryPair, out);
     return std::move(out.m);
 }
 

@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <numbers>
 
 #include "core/error.h"
@@ -307,6 +308,102 @@ TEST(ConeMap, RelaxedWindowsAheadMatchBruteForce) {
             GenerateConeMap(hf, ConeKind::Relaxed),
             GenerateConeMapBruteForce(hf, ConeKind::Relaxed),
             hf.name + " " + std::to_string(hf.width) + "x" + std::to_string(hf.height));
+}
+
+TEST(ConeMap, RelaxedProvenTravelIsTight) {
+    // The travel the search proves before marching a pair is tight: a ribbon (256x4, apex
+    // column at x = 10, depth 1) with one destination d texels on whose march stops in a
+    // trench starting exactly k cells past it (so its true travel is just over k - 1/2
+    // texels, what a clear k-window proves), and a competing destination the other way,
+    // nearer, found first, whose pair (it stops on the next cell, a wall) gives the least
+    // ratio above the trench pair's. Overstating the proven travel by a small fraction of
+    // a texel would prune the trench pair and leave the competitor's ratio. k = 8 is
+    // within the exit field's window (32 texels), k = 32 and 64 only in the windows
+    // ahead; along x and y, forwards and mirrored. Cells at depth 0 are never
+    // destinations (the listing's NaN) and never deeper than a ray. 1024 steps: a ratio
+    // moves by one step's depth, (1 - b) / steps, where the number of steps to a stop
+    // changes; at 128 that jump (~1.3%) leaves no competitor close enough.
+    constexpr int n = 256, across = 4, src = 1, steps = 1024;
+    ConeMapParams p;
+    p.searchSteps = steps;
+    struct Case {
+        int k, d;
+        float b;
+    };
+    for (const Case c : {Case{8, 14, 0.35f}, Case{32, 14, 0.22f}, Case{64, 14, 0.11f}})
+        for (const bool alongY : {false, true})
+            for (const bool mirrored : {false, true}) {
+                // Ribbon coordinate x (0..n) to the map's texel, and offsets along it.
+                const auto texel = [&](int x) {
+                    const int t = mirrored ? Wrap(2 * src - x, n) : x;
+                    return alongY ? std::pair{0, t} : std::pair{t, 0};
+                };
+                const auto offset = [&](int dx) {
+                    const int t = mirrored ? -dx : dx;
+                    return alongY ? std::pair{0, t} : std::pair{t, 0};
+                };
+                const auto ribbon = [&](int d2, float b2) {
+                    return testing::MakeField(
+                        alongY ? across : n, alongY ? n : across,
+                        [&](int i, int j) {
+                            int x = alongY ? j : i;
+                            if (mirrored) x = Wrap(2 * src - x, n);
+                            if (x == src) return 1.0f;
+                            if (x == src + c.d) return c.b;
+                            if (x >= src + c.d + c.k && x < src + c.d + c.k + 8)
+                                return 1.0f;
+                            if (x == src + d2) return b2;
+                            if (x == src + d2 + 1) return 1.0f;
+                            return 0.0f;
+                        },
+                        "ribbon");
+                };
+                const std::string what = "trench " + std::to_string(c.k) + " cells on" +
+                                         (alongY ? " along y" : " along x") +
+                                         (mirrored ? " mirrored" : "");
+                const auto [si, sj] = texel(src);
+                const auto ratio = [&](int d2, float b2, int dx) {
+                    const auto [ox, oy] = offset(dx);
+                    return detail::RelaxedPairRatio(ribbon(d2, b2), si, sj, ox, oy, steps,
+                                                    1.0f);
+                };
+                const float trench = ratio(2, 0.5f, c.d);
+                ASSERT_LT(trench, 1.0f) << what;
+                // The competitor: for each distance nearer than the trench pair's
+                // destination, bisection on its depth to the least ratio above the trench
+                // pair's (the ratio jumps where the listing's stopping sample changes:
+                // the least of several distances).
+                float competitor = std::numeric_limits<float>::infinity(), b2 = 0;
+                int d2 = 0;
+                for (int e = 2; e <= c.d - 8; ++e) {
+                    float lo = 0.3f, hi = 0.999f;
+                    ASSERT_LE(ratio(e, lo, e), trench) << what;
+                    ASSERT_GT(ratio(e, hi, e), trench) << what;
+                    for (int it = 0; it < 64 && std::nextafter(lo, hi) < hi; ++it) {
+                        const float mid = 0.5f * (lo + hi);
+                        (ratio(e, mid, e) > trench ? hi : lo) = mid;
+                    }
+                    if (ratio(e, hi, e) < competitor) {
+                        competitor = ratio(e, hi, e);
+                        b2 = hi;
+                        d2 = e;
+                    }
+                }
+                const DepthField hf = ribbon(d2, b2);
+                ASSERT_GT(competitor, trench) << what;
+                ASSERT_LT(competitor, trench * 1.003f) << what;
+                // As generated, and with the windows ahead tried on every pair (the
+                // search tries them on one pair in 16 where they have rarely pruned).
+                const ConeMap brute = GenerateConeMapBruteForce(hf, ConeKind::Relaxed, p);
+                for (const bool every : {false, true}) {
+                    const ConeMap m = detail::RelaxedListingMap(
+                        hf, p, false, ConeKind::Relaxed, true, every);
+                    EXPECT_EQ(m.values[size_t(sj) * size_t(hf.width) + size_t(si)],
+                              trench)
+                        << what << (every ? " every pair" : "");
+                    ExpectBitEqual(m, brute, what + (every ? " every pair" : ""));
+                }
+            }
 }
 
 TEST(ConeMap, RelaxedVariantsMatchTheirBruteForce) {
