@@ -50,6 +50,21 @@ int main(int argc, char** argv) {
                    " (reliefsim COMMAND --help for each)");
         return 2;
     }
+    // An option given an empty value ("--out ''", "--out=": an unset shell variable,
+    // say) is a mistake, never "the default" nor "none": refused, naming the option,
+    // before any command looks at it.
+    for (int i = 2; i < argc; ++i) {
+        const std::string arg = argv[i], prev = argv[i - 1];
+        const bool emptyAfter = arg.empty() && prev.rfind("--", 0) == 0 &&
+                                prev.size() > 2 && prev.find('=') == std::string::npos;
+        const bool emptyJoined = arg.rfind("--", 0) == 0 && arg.size() > 3 &&
+                                 arg.back() == '=' && arg.find('=') == arg.size() - 1;
+        if (emptyAfter || emptyJoined) {
+            const std::string opt = emptyJoined ? arg.substr(0, arg.size() - 1) : prev;
+            PrintError(opt + ": empty value; give one, or leave " + opt + " out");
+            return 2;
+        }
+    }
     try {
         app.parse(argc, argv);
     } catch (const CLI::CallForHelp& e) {

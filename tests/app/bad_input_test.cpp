@@ -407,6 +407,27 @@ TEST(BadInput, OutputLocationsThatCannotHoldTheOutputsAreRefusedBeforeWork) {
     ExpectFailure("maps --map builtin:shapes:16 --out " + Q(d / "file" / "m.exr"),
                   {"--out"}, d);
     ExpectFailure("maps --map builtin:shapes:16 --out " + Q(d / "res"), {"--out"}, d);
+    // An empty path given explicitly (an unset shell variable) is refused, not taken as
+    // "no output", for every output or input path option of maps and render.
+    ExpectFailure("render --size 8x8 --out ''", {"--out", "empty"}, d);
+    ExpectFailure("maps --map builtin:shapes:16 --out ''", {"--out", "empty"}, d);
+    ExpectFailure("maps --map builtin:shapes:16 --kind minmip --out ''",
+                  {"--out", "empty"}, d);
+    ExpectFailure(
+        "maps --map builtin:shapes:16 --out " + Q(d / "e.exr") + " --cache-dir ''",
+        {"--cache-dir", "empty"}, d, d / "e.exr");
+    ExpectFailure(
+        "maps --map builtin:shapes:16 --out " + Q(d / "e.exr") + " --external ''",
+        {"--external", "empty"}, d, d / "e.exr");
+    ExpectFailure("maps --map '' --out " + Q(d / "e.exr"), {"--map", "empty"}, d,
+                  d / "e.exr");
+    for (const char* opt : {"--cone-map", "--view-dir", "--light-dir", "--cone-encoding",
+                            "--cache-dir", "--method", "--size"})
+        ExpectFailure("render --out " + Q(d / "r") + " " + opt + " ''", {opt, "empty"}, d,
+                      d / "r");
+    ExpectFailure("maps --map builtin:shapes:16 --out=", {"--out", "empty"}, d);
+    ExpectFailure("render --out " + Q(d / "r") + " --camera=", {"--camera", "empty"}, d,
+                  d / "r");
 }
 
 TEST(BadInput, SummaryNamesTheFileAndRejectsWrongValues) {
