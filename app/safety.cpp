@@ -106,7 +106,14 @@ void RegisterSafetyCommand(CLI::App& root) {
         for (const std::string& m : methods) {
             RenderSettings s = a->options.settings;
             s.method = m;
-            ValidateSettings(s);
+            try {
+                ValidateSettings(s);
+            } catch (const Error& e) {
+                // The settings name the method "--method"; here it came from --methods.
+                std::string what = e.what();
+                if (what.rfind("--method ", 0) == 0) what.insert(8, "s");
+                throw Error(what);
+            }
         }
         const DepthField field = LoadRenderMap(a->options);
         const SafetyProfile p =

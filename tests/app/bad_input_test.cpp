@@ -339,6 +339,10 @@ TEST(BadInput, KernelSettingsAreValidated) {
           "frob=1", "linear_steps=0x10", "budget=-1"})
         ExpectRenderFailure(std::string("--method relief --set '") + set + "'",
                             {"--set"});
+    // safety takes its methods as --methods: the error names that option.
+    const fs::path d = Scratch();
+    ExpectFailure("safety --map builtin:shapes:16 --size 8x8 --methods relief,frob",
+                  {"--methods \"frob\"", "unknown"}, d);
 }
 
 TEST(BadInput, MapsOptionsThatDoNotApplyAreRefused) {
