@@ -333,7 +333,7 @@ std::vector<SweepConfig> ParseSweepConfig(const std::string& text,
     ojson root;
     try {
         root = ojson::parse(text);
-    } catch (const nlohmann::json::parse_error& e) {
+    } catch (const nlohmann::json::exception& e) {
         throw Error(subject + ": not valid JSON (" + std::string(e.what()) + ")");
     }
     if (!root.is_object()) Bad(subject, "expected a JSON object");

@@ -113,6 +113,11 @@ TEST(Sweep, CrossesMapsViewsMethodsAndSetLists) {
 
 TEST(Sweep, BadConfigurationsNameTheCulprit) {
     ExpectConfigError("{", "not valid JSON");
+    // A number beyond double's range is a parse error of its own kind in the JSON
+    // library.
+    ExpectConfigError(
+        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief", "set": {"linear_steps": 1e400}}]})",
+        "not valid JSON");
     ExpectConfigError("[1]", "expected a JSON object");
     ExpectConfigError(
         R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "colour": 1})",
