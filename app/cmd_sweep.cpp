@@ -21,9 +21,24 @@ struct SweepArgs {
     bool quiet = false, noCharts = false;
 };
 
-/// The charts of a finished run, unless --no-charts; a note when matplotlib is missing.
+/// Whether the folder's results.csv holds a configuration (a shard of more shards than
+/// configurations, or --max-rows 0, holds none).
+bool HasResults(const std::string& dir) {
+    std::ifstream in(std::filesystem::path(dir) / "results.csv");
+    std::string header, row;
+    return std::getline(in, header) && std::getline(in, row) && !row.empty();
+}
+
+/// The charts of a finished run, unless --no-charts or it holds no configuration; a note
+/// when matplotlib is missing or there is nothing to draw.
 std::string Charts(const std::string& dir, bool noCharts, bool quiet) {
     if (noCharts) return "";
+    if (!HasResults(dir)) {
+        if (!quiet)
+            std::cerr << "reliefsim: charts not drawn: " << dir
+                      << " holds no configuration yet\n";
+        return "";
+    }
     if (DrawSweepCharts(dir)) return ",mse_vs_steps.png,mse_vs_time.png";
     if (!quiet)
         std::cerr << "reliefsim: charts not drawn: no python3 with matplotlib "

@@ -306,6 +306,32 @@ TEST(Sweep, ChartsWithoutMatplotlibAreANoteAndAFailingScriptIsAnError) {
     EXPECT_NE(failing.err.find("sweep charts: false"), std::string::npos) << failing.err;
 }
 
+TEST(Sweep, AShardWithoutConfigurationsSucceedsWithoutCharts) {
+    // More shards than configurations (and --max-rows 0) leave a shard with none: it
+    // exits 0 with its results.csv and tables.md and a note instead of charts (the chart
+    // script refused a results.csv without rows, failing the shard); it merges with the
+    // others.
+    const fs::path d = Scratch();
+    std::ofstream(d / "cfg.json") << kConfig;
+    const std::string cfg = "sweep --config " + (d / "cfg.json").string() + " --out ";
+    const auto configs = ParseSweepConfig(kConfig, "cfg");
+    const std::string count = std::to_string(configs.size() + 1);
+    for (const std::string& extra :
+         {" --task-count " + count + " --task-index " + std::to_string(configs.size()),
+          std::string(" --max-rows 0")}) {
+        const fs::path out = d / ("s" + std::to_string(extra.size()));
+        const reliefsim::testing::CliResult r =
+            reliefsim::testing::RunCli(cfg + out.string() + extra, d);
+        EXPECT_EQ(r.exitCode, 0) << extra << "\n" << r.err;
+        EXPECT_EQ(reliefsim::testing::CountLines(r.err), 1) << r.err;
+        EXPECT_NE(r.err.find("holds no configuration"), std::string::npos) << r.err;
+        EXPECT_NE(r.out.find("0 configurations computed"), std::string::npos) << r.out;
+        EXPECT_TRUE(fs::exists(out / "results.csv")) << extra;
+        EXPECT_TRUE(fs::exists(out / "tables.md")) << extra;
+        EXPECT_FALSE(fs::exists(out / "mse_vs_steps.png")) << extra;
+    }
+}
+
 TEST(Sweep, TheStudiesOfTheDocsAreValidConfigurations) {
     // scripts/studies runs these; docs/studies/results.md is their output.
     int n = 0;
