@@ -218,12 +218,15 @@ std::string TraceCommand(const RenderOptions& o, int x, int y) {
     if (o.map.stores != Stores::Height) cmd << " --map-stores " << ToString(o.map.stores);
     cmd << " --method " << s.method;
     for (const auto& kv : s.set) cmd << " --set " << kv;
-    cmd << " --size " << s.width << "x" << s.height << " --view-angle "
-        << Number(s.viewAngle) << " --azimuth " << Number(s.azimuth) << " --distance "
-        << Number(s.distance) << " --fov " << Number(s.fovY) << " --depth-scale "
-        << Number(s.depthScale) << " --tiling " << Number(s.tiling) << " --filter "
-        << ToString(s.sampler.filter) << " --wrap " << ToString(s.sampler.wrap)
-        << " --texture-format " << kTextureFormatNames.Name(s.sampler.precision);
+    cmd << " --size " << s.width << "x" << s.height;
+    if (s.camera == CameraKind::Orbit)  // (the ortho camera refuses them)
+        cmd << " --view-angle " << Number(s.viewAngle) << " --azimuth "
+            << Number(s.azimuth) << " --distance " << Number(s.distance) << " --fov "
+            << Number(s.fovY);
+    cmd << " --depth-scale " << Number(s.depthScale) << " --tiling " << Number(s.tiling)
+        << " --filter " << ToString(s.sampler.filter) << " --wrap "
+        << ToString(s.sampler.wrap) << " --texture-format "
+        << kTextureFormatNames.Name(s.sampler.precision);
     auto vec3 = [](const glm::vec3& v) {
         return Number(v.x) + "," + Number(v.y) + "," + Number(v.z);
     };

@@ -81,16 +81,20 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
         ->capture_default_str();
     cmd->add_option("--set", o.settings.set, "kernel parameter key=value (repeatable)");
     cmd->add_option("--size", o.size, "framebuffer WxH")->capture_default_str();
-    cmd->add_option("--view-angle", o.settings.viewAngle,
-                    "degrees between the view direction and the plane normal, [0, 90)")
-        ->capture_default_str();
-    cmd->add_option("--azimuth", o.settings.azimuth,
-                    "camera azimuth around the normal, degrees")
-        ->capture_default_str();
-    cmd->add_option("--distance", o.settings.distance, "camera distance, plane widths")
-        ->capture_default_str();
-    cmd->add_option("--fov", o.settings.fovY, "vertical field of view, degrees")
-        ->capture_default_str();
+    o.orbitOptions = {
+        cmd->add_option("--view-angle", o.settings.viewAngle,
+                        "orbit camera: degrees between the view direction and the plane "
+                        "normal, [0, 90)")
+            ->capture_default_str(),
+        cmd->add_option("--azimuth", o.settings.azimuth,
+                        "orbit camera: azimuth around the normal, degrees")
+            ->capture_default_str(),
+        cmd->add_option("--distance", o.settings.distance,
+                        "orbit camera: distance, plane widths")
+            ->capture_default_str(),
+        cmd->add_option("--fov", o.settings.fovY,
+                        "orbit camera: vertical field of view, degrees")
+            ->capture_default_str()};
     cmd->add_option("--depth-scale", o.settings.depthScale,
                     "relief depth in plane widths (depth 1 = this), > 0")
         ->capture_default_str();
@@ -209,6 +213,12 @@ void ResolveRenderSettings(RenderOptions& o) {
     ParseSize(o.size, s.width, s.height);
     ParseScale("--iterations-scale", o.iterScale, s.iterScaleMin, s.iterScaleMax);
     ParseScale("--fetches-scale", o.fetchScale, s.fetchScaleMin, s.fetchScaleMax);
+    if (s.camera == CameraKind::Ortho)
+        for (const CLI::Option* opt : o.orbitOptions)
+            if (opt->count() > 0)
+                throw Error(opt->get_name() +
+                            ": applies to --camera orbit; the ortho camera looks along "
+                            "--view-dir");
     if (!o.viewDir.empty()) {
         if (s.camera != CameraKind::Ortho)
             throw Error("--view-dir " + o.viewDir + ": applies to --camera ortho");

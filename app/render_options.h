@@ -29,6 +29,9 @@ struct RenderOptions {
     std::string iterScale, fetchScale;  ///< MIN:MAX; empty: the settings' scale
     std::string viewDir;                ///< X,Y,Z (--view-dir); empty: the settings'
     const CLI::Option* viewDirOption = nullptr;
+    /// --view-angle, --azimuth, --distance, --fov: the orbit camera's (refused with
+    /// ortho)
+    std::vector<const CLI::Option*> orbitOptions;
     std::string lightDir;  ///< X,Y,Z (--light-dir); empty: the settings'
     std::optional<float> lightAngle, lightAzimuth;  ///< --light-angle, --light-azimuth
     std::string coneEncoding;     ///< --cone-encoding; empty: the kernel's own

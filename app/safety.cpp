@@ -91,6 +91,11 @@ void RegisterSafetyCommand(CLI::App& root) {
     cmd->add_flag("--json", a->json, "print JSON instead of a Markdown table");
     cmd->callback([a] {
         ResolveRenderSettings(a->options);
+        if (a->options.settings.camera == CameraKind::Ortho)
+            throw Error(
+                "--camera ortho: the safety profile varies the orbit camera's view angle "
+                "(--angles); the ortho camera has one direction (--view-dir), so every "
+                "column would be the same view");
         std::vector<std::string> methods = a->methods;
         // Default: every kernel the sampler allows (maxmip, qdm: --wrap repeat only).
         if (methods.empty())

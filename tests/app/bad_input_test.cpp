@@ -339,6 +339,16 @@ TEST(BadInput, KernelSettingsAreValidated) {
           "frob=1", "linear_steps=0x10", "budget=-1"})
         ExpectRenderFailure(std::string("--method relief --set '") + set + "'",
                             {"--set"});
+    // The orbit camera's options with the ortho camera would be ignored: refused.
+    for (const char* opt :
+         {"--view-angle 30", "--azimuth 10", "--distance 2", "--fov 40"})
+        ExpectRenderFailure(std::string("--camera ortho ") + opt,
+                            {std::string(opt).substr(0, std::string(opt).find(' ')),
+                             "applies to --camera orbit"});
+    // safety varies the orbit camera's view angle: the ortho camera would repeat one
+    // view.
+    ExpectFailure("safety --map builtin:shapes:16 --size 8x8 --camera ortho",
+                  {"--camera ortho", "view angle"}, Scratch());
     // safety takes its methods as --methods: the error names that option.
     const fs::path d = Scratch();
     ExpectFailure("safety --map builtin:shapes:16 --size 8x8 --methods relief,frob",

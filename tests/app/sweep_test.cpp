@@ -113,6 +113,16 @@ TEST(Sweep, CrossesMapsViewsMethodsAndSetLists) {
 
 TEST(Sweep, BadConfigurationsNameTheCulprit) {
     ExpectConfigError("{", "not valid JSON");
+    // Camera keys that the view's camera would ignore, as render refuses them.
+    ExpectConfigError(
+        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "views": [{"camera": "ortho", "view_angle": 30}]})",
+        "\"views\" [0] \"view_angle\": applies to the orbit camera");
+    ExpectConfigError(
+        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "fov": 40, "views": [{"camera": "ortho"}]})",
+        "\"views\" [0] \"fov\": applies to the orbit camera");
+    ExpectConfigError(
+        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "views": [{"view_dir": [0, 0, -1]}]})",
+        "\"view_dir\": applies to \"camera\": \"ortho\"");
     // A number beyond double's range is a parse error of its own kind in the JSON
     // library.
     ExpectConfigError(

@@ -483,6 +483,9 @@ TEST(GlCompare, TraceCommandReproducesTheScene) {
                              "--shadow-steps 7", "--shadow-penumbra ", "--ao cone",
                              "--cone-encoding float", "--cone-bounds bilinear"})
         EXPECT_NE(all.find(part), std::string::npos) << part << " in " << all;
+    // The orbit camera's options, which the ortho camera refuses, are left out.
+    for (const char* part : {"--view-angle", "--azimuth", "--distance", "--fov"})
+        EXPECT_EQ(all.find(part), std::string::npos) << part << " in " << all;
 }
 
 TEST(GlReference, EmbedsEveryGlslTwin) {
