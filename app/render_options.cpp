@@ -129,19 +129,25 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
                   "(with --method cns: the cone-normal soft shadow, --shadow-steps, "
                   "--shadow-penumbra) or soft "
                   "(Tatarchuk's seven weighted samples, --shadow-softening)");
-    cmd->add_option("--shadow-steps", o.settings.shadowSteps,
-                    "hard and cone shadows: steps of the light ray from the surface to "
-                    "the top")
-        ->capture_default_str()
-        ->check(CLI::Range(1, kMaxShadowSteps));
-    cmd->add_option("--shadow-softening", o.settings.shadowSoftening,
-                    "soft shadows: Tatarchuk's softening (the DirectX SDK sample's 0.58)")
-        ->capture_default_str()
-        ->check(CLI::Range(0.0f, kMaxShadowSoftening));
-    cmd->add_option("--shadow-penumbra", o.settings.shadowPenumbra,
-                    "cone shadows: the distance-field penumbra factor k (larger: harder)")
-        ->capture_default_str()
-        ->check(CLI::Range(0.0f, kMaxShadowPenumbra));
+    o.shadowSteps =
+        cmd->add_option(
+               "--shadow-steps", o.settings.shadowSteps,
+               "hard and cone shadows: steps of the light ray from the surface to "
+               "the top")
+            ->capture_default_str()
+            ->check(CLI::Range(1, kMaxShadowSteps));
+    o.shadowSoftening =
+        cmd->add_option(
+               "--shadow-softening", o.settings.shadowSoftening,
+               "soft shadows: Tatarchuk's softening (the DirectX SDK sample's 0.58)")
+            ->capture_default_str()
+            ->check(CLI::Range(0.0f, kMaxShadowSoftening));
+    o.shadowPenumbra =
+        cmd->add_option(
+               "--shadow-penumbra", o.settings.shadowPenumbra,
+               "cone shadows: the distance-field penumbra factor k (larger: harder)")
+            ->capture_default_str()
+            ->check(CLI::Range(0.0f, kMaxShadowPenumbra));
     AddEnumOption(
         cmd, "--ao", o.settings.ao, kAoNames,
         "ambient occlusion of every hit (docs/methods/shadows.md): none, or cone "
@@ -213,6 +219,17 @@ void ResolveRenderSettings(RenderOptions& o) {
     ParseSize(o.size, s.width, s.height);
     ParseScale("--iterations-scale", o.iterScale, s.iterScaleMin, s.iterScaleMax);
     ParseScale("--fetches-scale", o.fetchScale, s.fetchScaleMin, s.fetchScaleMax);
+    const auto shadowOption = [&](const CLI::Option* opt, bool applies,
+                                  const char* kinds) {
+        if (opt && opt->count() > 0 && !applies)
+            throw Error(opt->get_name() + ": applies to --shadow " + kinds +
+                        ", not --shadow " + std::string(kShadowNames.Name(s.shadow)));
+    };
+    shadowOption(o.shadowSteps,
+                 s.shadow == ShadowKind::Hard || s.shadow == ShadowKind::Cone,
+                 "hard or cone");
+    shadowOption(o.shadowSoftening, s.shadow == ShadowKind::Soft, "soft");
+    shadowOption(o.shadowPenumbra, s.shadow == ShadowKind::Cone, "cone");
     if (s.camera == CameraKind::Ortho)
         for (const CLI::Option* opt : o.orbitOptions)
             if (opt->count() > 0)

@@ -32,6 +32,10 @@ struct RenderOptions {
     /// --view-angle, --azimuth, --distance, --fov: the orbit camera's (refused with
     /// ortho)
     std::vector<const CLI::Option*> orbitOptions;
+    /// --shadow-steps, --shadow-softening, --shadow-penumbra (refused where the --shadow
+    /// given does not read them)
+    const CLI::Option *shadowSteps = nullptr, *shadowSoftening = nullptr,
+                      *shadowPenumbra = nullptr;
     std::string lightDir;  ///< X,Y,Z (--light-dir); empty: the settings'
     std::optional<float> lightAngle, lightAzimuth;  ///< --light-angle, --light-azimuth
     std::string coneEncoding;     ///< --cone-encoding; empty: the kernel's own

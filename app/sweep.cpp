@@ -390,6 +390,17 @@ std::vector<SweepConfig> ParseSweepConfig(const std::string& text,
                         "\"view_dir\"");
             if (!ortho && given("view_dir"))
                 Bad(vat + " \"view_dir\"", "applies to \"camera\": \"ortho\"");
+            const ShadowKind shadow = viewSettings.shadow;
+            const std::pair<const char*, bool> shadowKeys[] = {
+                {"shadow_steps",
+                 shadow == ShadowKind::Hard || shadow == ShadowKind::Cone},
+                {"shadow_softening", shadow == ShadowKind::Soft},
+                {"shadow_penumbra", shadow == ShadowKind::Cone}};
+            for (const auto& [k, applies] : shadowKeys)
+                if (given(k) && !applies)
+                    Bad(vat + " \"" + k + "\"",
+                        "does not apply to \"shadow\": \"" +
+                            std::string(kShadowNames.Name(shadow)) + "\"");
             for (size_t ki = 0; ki < methods->size(); ++ki) {
                 const ojson& m = (*methods)[ki];
                 const std::string mat =

@@ -3,6 +3,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <map>
 #include <sstream>
 
 #include "core/error.h"
@@ -49,11 +50,15 @@ ParamValues ResolveParams(const KernelInfo& method,
                           const std::vector<std::string>& settings) {
     ParamValues values;
     for (const auto& p : method.params) values[std::string(p.name)] = p.defaultValue;
+    std::map<std::string, std::string> given;  // key -> its setting, for repeats
     for (const auto& s : settings) {
         auto eq = s.find('=');
         if (eq == std::string::npos || eq == 0)
             throw Error(ParamName("set") + " \"" + s + "\": expected key=value");
         std::string key = s.substr(0, eq), text = s.substr(eq + 1);
+        if (const auto [it, fresh] = given.emplace(key, s); !fresh)
+            throw Error(ParamName("set") + " " + key + ": given twice (" + it->second +
+                        ", then " + s + "); give each parameter once");
         const ParamDef* def = nullptr;
         for (const auto& p : method.params)
             if (p.name == key) def = &p;

@@ -345,6 +345,15 @@ TEST(BadInput, KernelSettingsAreValidated) {
         ExpectRenderFailure(std::string("--camera ortho ") + opt,
                             {std::string(opt).substr(0, std::string(opt).find(' ')),
                              "applies to --camera orbit"});
+    // Shadow options the --shadow given does not read, and a kernel parameter given
+    // twice.
+    ExpectRenderFailure("--shadow-steps 5", {"--shadow-steps", "--shadow none"});
+    ExpectRenderFailure("--shadow hard --shadow-softening 0.5",
+                        {"--shadow-softening", "--shadow hard"});
+    ExpectRenderFailure("--shadow soft --shadow-penumbra 3",
+                        {"--shadow-penumbra", "--shadow soft"});
+    ExpectRenderFailure("--method relief --set budget=3 --set budget=4",
+                        {"--set budget", "given twice"});
     // safety varies the orbit camera's view angle: the ortho camera would repeat one
     // view.
     ExpectFailure("safety --map builtin:shapes:16 --size 8x8 --camera ortho",

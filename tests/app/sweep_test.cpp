@@ -123,6 +123,12 @@ TEST(Sweep, BadConfigurationsNameTheCulprit) {
     ExpectConfigError(
         R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "views": [{"view_dir": [0, 0, -1]}]})",
         "\"view_dir\": applies to \"camera\": \"ortho\"");
+    ExpectConfigError(
+        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "shadow_steps": 8})",
+        "\"shadow_steps\": does not apply to \"shadow\": \"none\"");
+    ExpectConfigError(
+        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "views": [{"shadow": "hard", "shadow_softening": 0.5}]})",
+        "\"shadow_softening\": does not apply to \"shadow\": \"hard\"");
     // A number beyond double's range is a parse error of its own kind in the JSON
     // library.
     ExpectConfigError(
