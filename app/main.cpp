@@ -61,6 +61,11 @@ int main(int argc, char** argv) {
                                  arg.back() == '=' && arg.find('=') == arg.size() - 1;
         if (emptyAfter || emptyJoined) {
             const std::string opt = emptyJoined ? arg.substr(0, arg.size() - 1) : prev;
+            // An enumerated option names its values itself ("" is unknown; must be one
+            // of ...): left to it.
+            const CLI::Option* o =
+                known ? app.get_subcommand(argv[1])->get_option_no_throw(opt) : nullptr;
+            if (o && o->get_type_name().find('|') != std::string::npos) continue;
             PrintError(opt + ": empty value; give one, or leave " + opt + " out");
             return 2;
         }

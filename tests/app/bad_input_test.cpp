@@ -449,8 +449,8 @@ TEST(BadInput, OutputLocationsThatCannotHoldTheOutputsAreRefusedBeforeWork) {
         ExpectFailure("render --out " + Q(d / "r") + " " + opt + " ''", {opt, "empty"}, d,
                       d / "r");
     ExpectFailure("maps --map builtin:shapes:16 --out=", {"--out", "empty"}, d);
-    ExpectFailure("render --out " + Q(d / "r") + " --camera=", {"--camera", "empty"}, d,
-                  d / "r");
+    ExpectFailure("render --out " + Q(d / "r") + " --cone-map=", {"--cone-map", "empty"},
+                  d, d / "r");
 }
 
 TEST(BadInput, SummaryNamesTheFileAndRejectsWrongValues) {
