@@ -195,7 +195,16 @@ void PrintStats(const ConeMap& m, const ConeMapStats& s) {
 void Run(const MapsOptions& o) {
     // Validate everything before any work or output.
     const ConeKind kind = o.kind;
-    const ConeEncoding enc = o.encoding;
+    // A PNG holds 8-bit codes: u8 (or u8sqrt when asked), so that the statistics (and
+    // the cache) describe what is written; float and u16 need an EXR.
+    const bool png = !o.out.empty() && std::filesystem::path(o.out).extension() == ".png";
+    if (png && o.Given("--encoding") && o.encoding != ConeEncoding::U8 &&
+        o.encoding != ConeEncoding::U8Sqrt)
+        throw Error("--encoding " + std::string(ToString(o.encoding)) + ": --out \"" +
+                    o.out +
+                    "\" is a PNG, which holds 8-bit codes (u8 or u8sqrt); use .exr");
+    const ConeEncoding enc =
+        png && !o.Given("--encoding") ? ConeEncoding::U8 : o.encoding;
     const bool mipKind = kind == ConeKind::MinMip || kind == ConeKind::MaxMip;
     if (!o.out.empty() && mipKind) {
         try {

@@ -396,14 +396,23 @@ TEST(BadInput, MapsOptionsThatDoNotApplyAreRefused) {
         {"--search-steps 99999999999 --kind relaxed", "--search-steps"},
         {"--animate -1", "--animate"},
         {"--out m.jpg", "--out"},
+        {"--encoding u16 --out m.png", "--encoding u16"},
+        {"--encoding float --out m.png", "--encoding float"},
     };
     for (const Case& c : cases) {
         fs::path d = Scratch();
         ExpectFailure(std::string("maps --map builtin:shapes:16 ") + c.args, {c.culprit},
                       d);
         EXPECT_FALSE(fs::exists(d / "m.exr")) << c.args;
+        EXPECT_FALSE(fs::exists(d / "m.png")) << c.args;
         EXPECT_FALSE(fs::exists(d / "c")) << c.args;
     }
+    // Without --encoding a PNG stores u8 codes, and its statistics say so.
+    const fs::path d = Scratch();
+    ASSERT_EQ(RunCli("maps --map builtin:shapes:16 --out " + Q(d / "m.png"), d).exitCode,
+              0);
+    EXPECT_NE(Slurp(d / "m.stats.json").find("\"encoding\": \"u8\""), std::string::npos)
+        << Slurp(d / "m.stats.json");
 }
 
 TEST(BadInput, OptionsOfOtherCommandsAreNotAccepted) {
