@@ -197,14 +197,6 @@ void Run(const MapsOptions& o) {
     const ConeKind kind = o.kind;
     // A PNG holds 8-bit codes: u8 (or u8sqrt when asked), so that the statistics (and
     // the cache) describe what is written; float and u16 need an EXR.
-    const bool png = !o.out.empty() && std::filesystem::path(o.out).extension() == ".png";
-    if (png && o.Given("--encoding") && o.encoding != ConeEncoding::U8 &&
-        o.encoding != ConeEncoding::U8Sqrt)
-        throw Error("--encoding " + std::string(ToString(o.encoding)) + ": --out \"" +
-                    o.out +
-                    "\" is a PNG, which holds 8-bit codes (u8 or u8sqrt); use .exr");
-    const ConeEncoding enc =
-        png && !o.Given("--encoding") ? ConeEncoding::U8 : o.encoding;
     const bool mipKind = kind == ConeKind::MinMip || kind == ConeKind::MaxMip;
     if (!o.out.empty() && mipKind) {
         try {
@@ -212,12 +204,16 @@ void Run(const MapsOptions& o) {
         } catch (const Error& e) {
             throw Error("--out " + std::string(e.what()));
         }
-    } else if (!o.out.empty()) {
-        const std::string ext = std::filesystem::path(o.out).extension().string();
-        if (ext != ".exr" && ext != ".png")
-            throw Error("--out \"" + o.out +
-                        "\": unsupported extension; expected .exr or .png");
     }
+    const bool png = !o.out.empty() && !mipKind &&
+                     ConeMapFormatOf(o.out) == ConeMapFormat::Png;  // throws: others
+    if (png && o.Given("--encoding") && o.encoding != ConeEncoding::U8 &&
+        o.encoding != ConeEncoding::U8Sqrt)
+        throw Error("--encoding " + std::string(ToString(o.encoding)) + ": --out \"" +
+                    o.out +
+                    "\" is a PNG, which holds 8-bit codes (u8 or u8sqrt); use .exr");
+    const ConeEncoding enc =
+        png && !o.Given("--encoding") ? ConeEncoding::U8 : o.encoding;
     if (o.animate < 0 || o.animate > 100000)
         throw Error("--animate " + std::to_string(o.animate) +
                     ": expected 0..100000 frames");
@@ -250,8 +246,7 @@ void Run(const MapsOptions& o) {
         CheckOutputDestination(StatsPath(o.out),
                                "--out \"" + o.out + "\" (its statistics)");
     }
-    if (!o.out.empty() && std::filesystem::path(o.out).extension() == ".png" &&
-        kind != ConeKind::Acm8 && ChannelCount(kind, p) > 4)
+    if (png && kind != ConeKind::Acm8 && ChannelCount(kind, p) > 4)
         throw Error("--out \"" + o.out + "\": " + std::string(ToString(kind)) + " has " +
                     std::to_string(ChannelCount(kind, p)) +
                     " channels, more than a PNG holds; use .exr");

@@ -210,6 +210,11 @@ ConeMapStats ComputeConeMapStats(const ConeMap& m, int bins = 32);
 /// JSON text of the statistics (plus kind, size, encoding).
 std::string ConeMapStatsJson(const ConeMap& m, const ConeMapStats& s, ConeEncoding enc);
 
+/// The format WriteConeMap picks by `path`'s extension, in either case (".exr",
+/// ".EXR"). Throws Error naming ParamName("out") and the path for any other extension.
+enum class ConeMapFormat { Exr, Png };
+ConeMapFormat ConeMapFormatOf(const std::string& path);
+
 /// Writes the map: ".exr" float (one channel per ratio, names from ChannelNames), ".png"
 /// 8-bit (channels 1..4; Acm8 as two 4-channel halves side by side, as 000 §II-D).
 /// Atomic: written to a temporary beside `path` and renamed (core/output_set.h); with

@@ -25,15 +25,19 @@ std::string Lower(std::string s) {
 
 }  // namespace
 
+ConeMapFormat ConeMapFormatOf(const std::string& path) {
+    const std::string ext = Lower(std::filesystem::path(path).extension().string());
+    if (ext == ".exr") return ConeMapFormat::Exr;
+    if (ext == ".png") return ConeMapFormat::Png;
+    throw Error(ParamName("out") + " \"" + path +
+                "\": unsupported extension; expected .exr (float) or .png (8-bit)");
+}
+
 void WriteConeMap(const std::string& path, const ConeMap& m, ConeEncoding enc,
                   OutputSet* outputs, const ConeMap* stored) {
-    const std::string ext = Lower(std::filesystem::path(path).extension().string());
-    if (ext != ".exr" && ext != ".png")
-        throw Error(ParamName("out") + " \"" + path +
-                    "\": unsupported extension; expected .exr (float) or .png (8-bit)");
     // The image writers stage the file (in `outputs`, or on their own), so a failure
     // leaves nothing behind.
-    if (ext == ".exr") {
+    if (ConeMapFormatOf(path) == ConeMapFormat::Exr) {
         ConeMap scratch;
         const ConeMap& values = stored ? *stored : StoredConeMap(m, enc, scratch);
         RS_CHECK(values.values.size() == m.values.size());

@@ -1,5 +1,6 @@
 // `reliefsim maps`: outputs (map, stats JSON), cache, animate, and bad input (non-zero
 // exit, one stderr line naming the culprit, nothing written).
+#include <OpenImageIO/imageio.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -7,11 +8,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 
 #include "tests/app/cli_util.h"
 #include "texture/image_io.h"
 
 namespace fs = std::filesystem;
+namespace OIIO = OIIO_NAMESPACE;
 
 namespace {
 
@@ -181,6 +184,32 @@ TEST(MapsCli, UnknownEncoding) {
 
 TEST(MapsCli, BadOutputExtension) {
     ExpectCleanFailure("--map builtin:shapes:16", "m.jpg", ".jpg");
+}
+
+TEST(MapsCli, OutputExtensionInEitherCase) {
+    // The writer picks the format by the extension in either case, and so does the check
+    // before it (".EXR" was refused as unsupported while the writer took it).
+    const fs::path d = Scratch();
+    for (const char* name : {"m.EXR", "m.Png"}) {
+        const fs::path out = d / name;
+        const Result r =
+            RunCli("maps --map builtin:shapes:16 --kind cone --out " + out.string(), d);
+        ASSERT_EQ(r.exitCode, 0) << name << "\n" << r.err;
+        const std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(out.string());
+        ASSERT_TRUE(in) << name;
+        const bool exr = std::string(name) == "m.EXR";
+        EXPECT_STREQ(in->format_name(), exr ? "openexr" : "png") << name;
+        EXPECT_EQ(in->spec().format, exr ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8)
+            << name;
+        const std::string json =
+            Slurp(d / (fs::path(name).stem().string() + ".stats.json"));
+        EXPECT_NE(json.find(exr ? "\"encoding\": \"float\"" : "\"encoding\": \"u8\""),
+                  std::string::npos)
+            << name << "\n"
+            << json;
+    }
+    // An upper-case PNG still refuses a float encoding.
+    ExpectCleanFailure("--map builtin:shapes:16 --encoding float", "is a PNG", ".PNG");
 }
 
 TEST(MapsCli, TooManyChannelsForPng) {
