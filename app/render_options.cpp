@@ -10,6 +10,7 @@
 #include "app/enum_option.h"
 #include "core/error.h"
 #include "core/output_set.h"
+#include "core/param_name.h"
 #include "core/parse.h"
 #include "raster/rasterizer.h"
 
@@ -81,20 +82,20 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
         ->capture_default_str();
     cmd->add_option("--set", o.settings.set, "kernel parameter key=value (repeatable)");
     cmd->add_option("--size", o.size, "framebuffer WxH")->capture_default_str();
-    o.orbitOptions = {
-        cmd->add_option("--view-angle", o.settings.viewAngle,
-                        "orbit camera: degrees between the view direction and the plane "
-                        "normal, [0, 90)")
-            ->capture_default_str(),
-        cmd->add_option("--azimuth", o.settings.azimuth,
-                        "orbit camera: azimuth around the normal, degrees")
-            ->capture_default_str(),
-        cmd->add_option("--distance", o.settings.distance,
-                        "orbit camera: distance, plane widths")
-            ->capture_default_str(),
-        cmd->add_option("--fov", o.settings.fovY,
-                        "orbit camera: vertical field of view, degrees")
-            ->capture_default_str()};
+    o.command = cmd;
+    cmd->add_option("--view-angle", o.settings.viewAngle,
+                    "orbit camera: degrees between the view direction and the plane "
+                    "normal, [0, 90)")
+        ->capture_default_str();
+    cmd->add_option("--azimuth", o.settings.azimuth,
+                    "orbit camera: azimuth around the normal, degrees")
+        ->capture_default_str();
+    cmd->add_option("--distance", o.settings.distance,
+                    "orbit camera: distance, plane widths")
+        ->capture_default_str();
+    cmd->add_option("--fov", o.settings.fovY,
+                    "orbit camera: vertical field of view, degrees")
+        ->capture_default_str();
     cmd->add_option("--depth-scale", o.settings.depthScale,
                     "relief depth in plane widths (depth 1 = this), > 0")
         ->capture_default_str();
@@ -104,12 +105,11 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
                   "orbit (--view-angle, --azimuth, --distance, --fov) or ortho: the "
                   "texture-space view of one tile, pixel (x, y) at uv ((x+0.5)/W, "
                   "(y+0.5)/H), one ray direction (--view-dir)");
-    o.viewDirOption =
-        cmd->add_option("--view-dir", o.viewDir,
-                        "ortho camera: tangent-space direction from the eye towards the "
-                        "surface, X,Y,Z with Z < 0")
-            ->type_name("X,Y,Z")
-            ->default_str("0,0,-1");
+    cmd->add_option("--view-dir", o.viewDir,
+                    "ortho camera: tangent-space direction from the eye towards the "
+                    "surface, X,Y,Z with Z < 0")
+        ->type_name("X,Y,Z")
+        ->default_str("0,0,-1");
     cmd->add_option(
            "--light-dir", o.lightDir,
            "directional light of the shading: tangent-space direction from the "
@@ -129,25 +129,19 @@ void AddRenderOptions(CLI::App* cmd, RenderOptions& o, bool withHeatmapScales) {
                   "(with --method cns: the cone-normal soft shadow, --shadow-steps, "
                   "--shadow-penumbra) or soft "
                   "(Tatarchuk's seven weighted samples, --shadow-softening)");
-    o.shadowSteps =
-        cmd->add_option(
-               "--shadow-steps", o.settings.shadowSteps,
-               "hard and cone shadows: steps of the light ray from the surface to "
-               "the top")
-            ->capture_default_str()
-            ->check(CLI::Range(1, kMaxShadowSteps));
-    o.shadowSoftening =
-        cmd->add_option(
-               "--shadow-softening", o.settings.shadowSoftening,
-               "soft shadows: Tatarchuk's softening (the DirectX SDK sample's 0.58)")
-            ->capture_default_str()
-            ->check(CLI::Range(0.0f, kMaxShadowSoftening));
-    o.shadowPenumbra =
-        cmd->add_option(
-               "--shadow-penumbra", o.settings.shadowPenumbra,
-               "cone shadows: the distance-field penumbra factor k (larger: harder)")
-            ->capture_default_str()
-            ->check(CLI::Range(0.0f, kMaxShadowPenumbra));
+    cmd->add_option("--shadow-steps", o.settings.shadowSteps,
+                    "hard and cone shadows: steps of the light ray from the surface to "
+                    "the top")
+        ->capture_default_str()
+        ->check(CLI::Range(1, kMaxShadowSteps));
+    cmd->add_option("--shadow-softening", o.settings.shadowSoftening,
+                    "soft shadows: Tatarchuk's softening (the DirectX SDK sample's 0.58)")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0f, kMaxShadowSoftening));
+    cmd->add_option("--shadow-penumbra", o.settings.shadowPenumbra,
+                    "cone shadows: the distance-field penumbra factor k (larger: harder)")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0f, kMaxShadowPenumbra));
     AddEnumOption(
         cmd, "--ao", o.settings.ao, kAoNames,
         "ambient occlusion of every hit (docs/methods/shadows.md): none, or cone "
@@ -219,28 +213,11 @@ void ResolveRenderSettings(RenderOptions& o) {
     ParseSize(o.size, s.width, s.height);
     ParseScale("--iterations-scale", o.iterScale, s.iterScaleMin, s.iterScaleMax);
     ParseScale("--fetches-scale", o.fetchScale, s.fetchScaleMin, s.fetchScaleMax);
-    const auto shadowOption = [&](const CLI::Option* opt, bool applies,
-                                  const char* kinds) {
-        if (opt && opt->count() > 0 && !applies)
-            throw Error(opt->get_name() + ": applies to --shadow " + kinds +
-                        ", not --shadow " + std::string(kShadowNames.Name(s.shadow)));
-    };
-    shadowOption(o.shadowSteps,
-                 s.shadow == ShadowKind::Hard || s.shadow == ShadowKind::Cone,
-                 "hard or cone");
-    shadowOption(o.shadowSoftening, s.shadow == ShadowKind::Soft, "soft");
-    shadowOption(o.shadowPenumbra, s.shadow == ShadowKind::Cone, "cone");
-    if (s.camera == CameraKind::Ortho)
-        for (const CLI::Option* opt : o.orbitOptions)
-            if (opt->count() > 0)
-                throw Error(opt->get_name() +
-                            ": applies to --camera orbit; the ortho camera looks along "
-                            "--view-dir");
-    if (!o.viewDir.empty()) {
-        if (s.camera != CameraKind::Ortho)
-            throw Error("--view-dir " + o.viewDir + ": applies to --camera ortho");
-        s.viewDir = ParseVec3("--view-dir", o.viewDir);
-    }
+    RefuseIgnoredSettings(s, [&](std::string_view key) {
+        const CLI::Option* opt = o.command->get_option_no_throw(FlagName(key));
+        return opt && opt->count() > 0;
+    });
+    if (!o.viewDir.empty()) s.viewDir = ParseVec3("--view-dir", o.viewDir);
     if (!o.lightDir.empty()) {
         if (o.lightAngle || o.lightAzimuth)
             throw Error("--light-dir " + o.lightDir +

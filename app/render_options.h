@@ -28,14 +28,8 @@ struct RenderOptions {
     std::string size = SizeText(settings.width, settings.height);  ///< WxH
     std::string iterScale, fetchScale;  ///< MIN:MAX; empty: the settings' scale
     std::string viewDir;                ///< X,Y,Z (--view-dir); empty: the settings'
-    const CLI::Option* viewDirOption = nullptr;
-    /// --view-angle, --azimuth, --distance, --fov: the orbit camera's (refused with
-    /// ortho)
-    std::vector<const CLI::Option*> orbitOptions;
-    /// --shadow-steps, --shadow-softening, --shadow-penumbra (refused where the --shadow
-    /// given does not read them)
-    const CLI::Option *shadowSteps = nullptr, *shadowSoftening = nullptr,
-                      *shadowPenumbra = nullptr;
+    /// The command the options were added to: which were given (RefuseIgnoredSettings).
+    const CLI::App* command = nullptr;
     std::string lightDir;  ///< X,Y,Z (--light-dir); empty: the settings'
     std::optional<float> lightAngle, lightAzimuth;  ///< --light-angle, --light-azimuth
     std::string coneEncoding;     ///< --cone-encoding; empty: the kernel's own

@@ -377,30 +377,14 @@ std::vector<SweepConfig> ParseSweepConfig(const std::string& text,
             const std::string vat = subject + " \"views\" [" + std::to_string(vi) + "]";
             for (const auto& [k, x] : views[vi].items())
                 ApplyRenderKey(viewSettings, k, x, vat);
-            // As render refuses them: the orbit camera's keys with the ortho camera, and
-            // view_dir with the orbit camera (each would be ignored, yet be a column).
-            const auto given = [&](const char* k) {
-                return views[vi].contains(k) || root.contains(k);
-            };
-            const bool ortho = viewSettings.camera == CameraKind::Ortho;
-            for (const char* k : {"view_angle", "azimuth", "distance", "fov"})
-                if (ortho && given(k))
-                    Bad(vat + " \"" + k + "\"",
-                        "applies to the orbit camera; the ortho camera looks along "
-                        "\"view_dir\"");
-            if (!ortho && given("view_dir"))
-                Bad(vat + " \"view_dir\"", "applies to \"camera\": \"ortho\"");
-            const ShadowKind shadow = viewSettings.shadow;
-            const std::pair<const char*, bool> shadowKeys[] = {
-                {"shadow_steps",
-                 shadow == ShadowKind::Hard || shadow == ShadowKind::Cone},
-                {"shadow_softening", shadow == ShadowKind::Soft},
-                {"shadow_penumbra", shadow == ShadowKind::Cone}};
-            for (const auto& [k, applies] : shadowKeys)
-                if (given(k) && !applies)
-                    Bad(vat + " \"" + k + "\"",
-                        "does not apply to \"shadow\": \"" +
-                            std::string(kShadowNames.Name(shadow)) + "\"");
+            // As render refuses them (each would be ignored, yet be a column).
+            try {
+                RefuseIgnoredSettings(viewSettings, [&](std::string_view k) {
+                    return views[vi].contains(k) || root.contains(k);
+                });
+            } catch (const Error& e) {
+                Bad(vat, e.what());
+            }
             for (size_t ki = 0; ki < methods->size(); ++ki) {
                 const ojson& m = (*methods)[ki];
                 const std::string mat =

@@ -167,6 +167,35 @@ void ValidateSettings(const RenderSettings& s) {
     PickLaneWidth(s.lanes);
 }
 
+void RefuseIgnoredSettings(const RenderSettings& s,
+                           const std::function<bool(std::string_view)>& given) {
+    if (s.camera == CameraKind::Ortho) {
+        for (const char* key : {"view_angle", "azimuth", "distance", "fov"})
+            if (given(key))
+                throw Error(ParamName(key) + ": applies to " + ParamName("camera") +
+                            " orbit; the ortho camera looks along " +
+                            ParamName("view_dir"));
+    } else if (given("view_dir")) {
+        throw Error(ParamName("view_dir") + ": applies to " + ParamName("camera") +
+                    " ortho, not " + ParamName("camera") + " " +
+                    std::string(kCameraNames.Name(s.camera)));
+    }
+    const struct {
+        const char* key;
+        bool read;
+        const char* kinds;
+    } shadowKeys[] = {
+        {"shadow_steps", s.shadow == ShadowKind::Hard || s.shadow == ShadowKind::Cone,
+         "hard or cone"},
+        {"shadow_softening", s.shadow == ShadowKind::Soft, "soft"},
+        {"shadow_penumbra", s.shadow == ShadowKind::Cone, "cone"}};
+    for (const auto& k : shadowKeys)
+        if (!k.read && given(k.key))
+            throw Error(ParamName(k.key) + ": applies to " + ParamName("shadow") + " " +
+                        k.kinds + ", not " + ParamName("shadow") + " " +
+                        std::string(kShadowNames.Name(s.shadow)));
+}
+
 Mesh MakePlane(float tiling) {
     Mesh mesh;
     const glm::vec2 corners[4] = {

@@ -3,7 +3,9 @@
 // take their scene from here.
 #pragma once
 
+#include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/enum_names.h"
@@ -79,6 +81,15 @@ struct RenderSettings {
 /// Throws Error naming the first bad setting (size, angles, depth scale, tiling, threads,
 /// scales, method, parameters).
 void ValidateSettings(const RenderSettings& settings);
+
+/// Refuses a setting that was given but that the others make the render ignore: the
+/// orbit camera's view_angle, azimuth, distance and fov with the ortho camera, view_dir
+/// with the orbit camera, and the shadow_steps, shadow_softening and shadow_penumbra
+/// that the shadow kind does not read. `given(key)` says whether the setting of that key
+/// ("view_angle") was given: render asks its options, sweep its configuration's keys.
+/// Throws Error naming the setting (ParamName) and what it applies to.
+void RefuseIgnoredSettings(const RenderSettings& settings,
+                           const std::function<bool(std::string_view)>& given);
 
 /// The scene's plane: the world square [-0.5,0.5]^2 in the z = 0 plane, two triangles,
 /// normal +z, tangent +x (u), bitangent -y (v), uv = (x + 0.5, 0.5 - y) * tiling, so

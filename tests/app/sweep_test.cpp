@@ -112,68 +112,56 @@ TEST(Sweep, CrossesMapsViewsMethodsAndSetLists) {
 }
 
 TEST(Sweep, BadConfigurationsNameTheCulprit) {
-    ExpectConfigError("{", "not valid JSON");
-    // Camera keys that the view's camera would ignore, as render refuses them.
-    ExpectConfigError(
-        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "views": [{"camera": "ortho", "view_angle": 30}]})",
-        "\"views\" [0] \"view_angle\": applies to the orbit camera");
-    ExpectConfigError(
-        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "fov": 40, "views": [{"camera": "ortho"}]})",
-        "\"views\" [0] \"fov\": applies to the orbit camera");
-    ExpectConfigError(
-        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "views": [{"view_dir": [0, 0, -1]}]})",
-        "\"view_dir\": applies to \"camera\": \"ortho\"");
-    ExpectConfigError(
-        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "shadow_steps": 8})",
-        "\"shadow_steps\": does not apply to \"shadow\": \"none\"");
-    ExpectConfigError(
-        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "views": [{"shadow": "hard", "shadow_softening": 0.5}]})",
-        "\"shadow_softening\": does not apply to \"shadow\": \"hard\"");
-    // A number beyond double's range is a parse error of its own kind in the JSON
-    // library.
-    ExpectConfigError(
-        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief", "set": {"linear_steps": 1e400}}]})",
-        "not valid JSON");
-    ExpectConfigError("[1]", "expected a JSON object");
-    ExpectConfigError(
-        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "colour": 1})",
-        "\"colour\": unknown key; valid: size, maps");
-    ExpectConfigError(R"({"methods": [{"method": "relief"}]})", "no \"maps\"");
-    ExpectConfigError(R"({"maps": ["builtin:shapes"]})", "no \"methods\"");
-    ExpectConfigError(R"({"maps": [], "methods": [{"method": "relief"}]})",
-                      "non-empty list");
-    ExpectConfigError(
-        R"({"maps": ["builtin:shapes"], "methods": [{"method": "cheese"}]})", "cheese");
-    ExpectConfigError(
-        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief", "set": {"steps": 3}}]})",
-        "steps");
-    ExpectConfigError(
-        R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief", "set": {"linear_steps": []}}]})",
-        "empty list");
-    ExpectConfigError(
-        R"({"maps": ["builtin:shapes"], "views": [{"view_angle": 95}], "methods": [{"method": "relief"}]})",
-        "view_angle 95");
-    ExpectConfigError(
-        R"({"maps": ["builtin:shapes"], "views": [{"filter": "bicubic"}], "methods": [{"method": "relief"}]})",
-        "\"bicubic\" is unknown");
-    ExpectConfigError(
-        R"({"maps": ["builtin:shapes"], "views": [{"camera": "ortho", "view_dir": [0, 0, 1]}], "methods": [{"method": "relief"}]})",
-        "Z must be < 0");
-    ExpectConfigError(
-        R"({"maps": ["builtin:shapes"], "views": [{"camera": "fisheye"}], "methods": [{"method": "relief"}]})",
-        "\"fisheye\" is unknown");
-    ExpectConfigError(
-        R"({"maps": [{"map": "x.png", "map_channel": "Q"}], "methods": [{"method": "relief"}]})",
-        "\"Q\" is unknown");
-    ExpectConfigError(
-        R"({"size": "0x3", "maps": ["builtin:shapes"], "methods": [{"method": "relief"}]})",
-        "size");
-    ExpectConfigError(
-        R"({"maps": ["builtin:shapes"], "cone_bounds": "exact", "methods": [{"method": "csm"}]})",
-        "\"exact\" is unknown");
-    ExpectConfigError(
-        R"({"maps": ["builtin:shapes"], "cone_bounds": "bilinear", "methods": [{"method": "rcs"}]})",
-        "no bilinear-bound variant");
+    // {configuration, what its error names}
+    const std::pair<std::string, std::string> kBad[] = {
+        {"{", "not valid JSON"},
+        // Camera keys that the view's camera would ignore, as render refuses them.
+        {R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "views": [{"camera": "ortho", "view_angle": 30}]})",
+         "\"views\" [0]: view_angle: applies to camera orbit"},
+        {R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "fov": 40, "views": [{"camera": "ortho"}]})",
+         "\"views\" [0]: fov: applies to camera orbit"},
+        {R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "views": [{"view_dir": [0, 0, -1]}]})",
+         "view_dir: applies to camera ortho, not camera orbit"},
+        {R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "shadow_steps": 8})",
+         "shadow_steps: applies to shadow hard or cone, not shadow none"},
+        {R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "views": [{"shadow": "hard", "shadow_softening": 0.5}]})",
+         "shadow_softening: applies to shadow soft, not shadow hard"},
+        // A number beyond double's range is a parse error of its own kind in the JSON
+        // library.
+        {R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief", "set": {"linear_steps": 1e400}}]})",
+         "not valid JSON"},
+        {"[1]", "expected a JSON object"},
+        {R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief"}], "colour": 1})",
+         "\"colour\": unknown key; valid: size, maps"},
+        {R"({"methods": [{"method": "relief"}]})", "no \"maps\""},
+        {R"({"maps": ["builtin:shapes"]})", "no \"methods\""},
+        {R"({"maps": [], "methods": [{"method": "relief"}]})", "non-empty list"},
+        {R"({"maps": ["builtin:shapes"], "methods": [{"method": "cheese"}]})", "cheese"},
+        {R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief", "set": {"steps": 3}}]})",
+         "steps"},
+        {R"({"maps": ["builtin:shapes"], "methods": [{"method": "relief", "set": {"linear_steps": []}}]})",
+         "empty list"},
+        {R"({"maps": ["builtin:shapes"], "views": [{"view_angle": 95}], "methods": [{"method": "relief"}]})",
+         "view_angle 95"},
+        {R"({"maps": ["builtin:shapes"], "views": [{"filter": "bicubic"}], "methods": [{"method": "relief"}]})",
+         "\"bicubic\" is unknown"},
+        {R"({"maps": ["builtin:shapes"], "views": [{"camera": "ortho", "view_dir": [0, 0, 1]}], "methods": [{"method": "relief"}]})",
+         "Z must be < 0"},
+        {R"({"maps": ["builtin:shapes"], "views": [{"camera": "fisheye"}], "methods": [{"method": "relief"}]})",
+         "\"fisheye\" is unknown"},
+        {R"({"maps": [{"map": "x.png", "map_channel": "Q"}], "methods": [{"method": "relief"}]})",
+         "\"Q\" is unknown"},
+        {R"({"size": "0x3", "maps": ["builtin:shapes"], "methods": [{"method": "relief"}]})",
+         "size"},
+        {R"({"maps": ["builtin:shapes"], "cone_bounds": "exact", "methods": [{"method": "csm"}]})",
+         "\"exact\" is unknown"},
+        {R"({"maps": ["builtin:shapes"], "cone_bounds": "bilinear", "methods": [{"method": "rcs"}]})",
+         "no bilinear-bound variant"},
+    };
+    for (const auto& [config, culprit] : kBad) {
+        SCOPED_TRACE(config);
+        ExpectConfigError(config, culprit);
+    }
     EXPECT_NO_THROW(ParseSweepConfig(
         R"({"maps": ["builtin:shapes"], "views": [{"cone_bounds": "bilinear"}, {}], "methods": [{"method": "acm4"}]})",
         "cfg"));

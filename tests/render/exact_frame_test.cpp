@@ -254,3 +254,53 @@ TEST(LaneGroupMaps, TotalEqualsTheExecutedWarpCost) {
             EXPECT_EQ(m.totalCost, out.laneCost.warp32) << method << " " << angle;
         }
 }
+
+// A setting is refused exactly when the render ignores it: changing its value changes
+// the frame (colour, hits, visibility) unless RefuseIgnoredSettings refuses it, for
+// every camera and shadow kind.
+TEST(IgnoredSettings, RefusedExactlyWhenTheFrameIgnoresThem) {
+    const DepthField field = MakeBuiltinMap("builtin:bumps:32");
+    const std::pair<const char*, void (*)(RenderSettings&)> changes[] = {
+        {"view_angle", [](RenderSettings& s) { s.viewAngle = 40.0f; }},
+        {"azimuth", [](RenderSettings& s) { s.azimuth = 35.0f; }},
+        {"distance", [](RenderSettings& s) { s.distance = 2.5f; }},
+        {"fov", [](RenderSettings& s) { s.fovY = 30.0f; }},
+        {"view_dir", [](RenderSettings& s) { s.viewDir = glm::vec3(0.4f, 0.2f, -1.0f); }},
+        {"shadow_steps", [](RenderSettings& s) { s.shadowSteps = 3; }},
+        {"shadow_softening", [](RenderSettings& s) { s.shadowSoftening = 0.05f; }},
+        {"shadow_penumbra", [](RenderSettings& s) { s.shadowPenumbra = 0.5f; }}};
+    for (CameraKind camera : {CameraKind::Orbit, CameraKind::Ortho})
+        for (ShadowKind shadow :
+             {ShadowKind::None, ShadowKind::Hard, ShadowKind::Soft, ShadowKind::Cone}) {
+            RenderSettings s = Settings(shadow == ShadowKind::Cone ? "cns" : "relief");
+            s.width = 24;
+            s.height = 16;
+            s.reference = false;
+            s.camera = camera;
+            s.shadow = shadow;
+            s.lightDir = glm::vec3(0.8f, 0.3f, 0.6f);
+            const RenderOutput base = Render(field, s);
+            for (const auto& [key, change] : changes) {
+                SCOPED_TRACE(std::string(kCameraNames.Name(camera)) + " " +
+                             std::string(kShadowNames.Name(shadow)) + " " + key);
+                RenderSettings t = s;
+                change(t);
+                const RenderOutput o = Render(field, t);
+                const bool ignored = o.color == base.color &&
+                                     o.visibility == base.visibility &&
+                                     o.record.hitDepth == base.record.hitDepth;
+                bool refused = false;
+                try {
+                    RefuseIgnoredSettings(s,
+                                          [key = std::string(key)](std::string_view k) {
+                                              return k == key;
+                                          });
+                } catch (const Error& e) {
+                    refused = true;
+                    EXPECT_NE(std::string(e.what()).find(key), std::string::npos)
+                        << e.what();
+                }
+                EXPECT_EQ(refused, ignored);
+            }
+        }
+}
