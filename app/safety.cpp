@@ -8,6 +8,7 @@
 #include "app/commands.h"
 #include "app/render_options.h"
 #include "core/error.h"
+#include "core/param_name.h"
 #include "render/frame.h"
 
 namespace reliefsim {
@@ -64,6 +65,14 @@ std::string FormatSafetyProfile(const SafetyProfile& p) {
 
 namespace {
 
+/// The flags safety's settings came from: --methods and --angles list the methods and
+/// view angles.
+std::string SafetyFlagName(std::string_view param) {
+    if (param == "method") return "--methods";
+    if (param == "view_angle") return "--angles";
+    return FlagName(param);
+}
+
 struct SafetyArgs {
     RenderOptions options;
     std::vector<std::string> methods;
@@ -90,12 +99,14 @@ void RegisterSafetyCommand(CLI::App& root) {
         ->capture_default_str();
     cmd->add_flag("--json", a->json, "print JSON instead of a Markdown table");
     cmd->callback([a] {
-        ResolveRenderSettings(a->options);
-        if (a->options.settings.camera == CameraKind::Ortho)
-            throw Error(
-                "--camera ortho: the safety profile varies the orbit camera's view angle "
-                "(--angles); the ortho camera has one direction (--view-dir), so every "
-                "column would be the same view");
+        // The profile's methods and angles are --methods and --angles: --method and
+        // --view-angle would be ignored.
+        for (const auto& [flag, what] :
+             {std::pair{"--method", "methods of --methods"},
+              std::pair{"--view-angle", "view angles of --angles"}})
+            if (a->options.command->get_option(flag)->count() > 0)
+                throw Error(std::string(flag) + ": safety profiles the " + what);
+        if (a->angles.empty()) throw Error("--angles: no view angle");
         std::vector<std::string> methods = a->methods;
         // Default: every kernel the sampler allows (maxmip, qdm: --wrap repeat only).
         if (methods.empty())
@@ -103,23 +114,24 @@ void RegisterSafetyCommand(CLI::App& root) {
                 if (!m->readsPyramid ||
                     a->options.settings.sampler.wrap == WrapMode::Repeat)
                     methods.push_back(std::string(m->name));
-        for (float angle : a->angles) {
-            RenderSettings s = a->options.settings;
-            s.viewAngle = angle;
-            ValidateSettings(s);  // every angle before any work
-        }
-        for (const std::string& m : methods) {
-            RenderSettings s = a->options.settings;
-            s.method = m;
-            try {
+        // The settings are validated for every method and angle before any work, naming
+        // them as their options here.
+        const ScopedParamNamer names(&SafetyFlagName);
+        a->options.settings.method = methods.front();
+        a->options.settings.viewAngle = a->angles.front();
+        ResolveRenderSettings(a->options);
+        if (a->options.settings.camera == CameraKind::Ortho)
+            throw Error(
+                "--camera ortho: the safety profile varies the orbit camera's view angle "
+                "(--angles); the ortho camera has one direction (--view-dir), so every "
+                "column would be the same view");
+        for (const std::string& m : methods)
+            for (float angle : a->angles) {
+                RenderSettings s = a->options.settings;
+                s.method = m;
+                s.viewAngle = angle;
                 ValidateSettings(s);
-            } catch (const Error& e) {
-                // The settings name the method "--method"; here it came from --methods.
-                std::string what = e.what();
-                if (what.rfind("--method ", 0) == 0) what.insert(8, "s");
-                throw Error(what);
             }
-        }
         const DepthField field = LoadRenderMap(a->options);
         const SafetyProfile p =
             ComputeSafetyProfile(field, a->options.settings, methods, a->angles);

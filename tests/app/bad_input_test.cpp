@@ -362,6 +362,22 @@ TEST(BadInput, KernelSettingsAreValidated) {
     const fs::path d = Scratch();
     ExpectFailure("safety --map builtin:shapes:16 --size 8x8 --methods relief,frob",
                   {"--methods \"frob\"", "unknown"}, d);
+    // ... and its angles as --angles; --method and --view-angle would be ignored.
+    for (const auto& [args, culprits] :
+         std::vector<std::pair<std::string, std::vector<std::string>>>{
+             {"--methods relief --method csm", {"--method:", "--methods"}},
+             {"--view-angle 10", {"--view-angle", "--angles"}},
+             {"--angles 20,95", {"--angles 95"}},
+             {"--methods relief --ao cone", {"--ao cone", "--methods relief"}}})
+        ExpectFailure("safety --map builtin:shapes:16 --size 8x8 " + args, culprits, d);
+    // Its settings are checked with the methods profiled, not render's default method:
+    // cns reads the cone-normal map that the cone shadow and AO need.
+    const CliResult ok = RunCli(
+        "safety --map builtin:shapes:16 --size 8x8 --angles 30 --methods cns --shadow "
+        "cone --ao cone",
+        d);
+    EXPECT_EQ(ok.exitCode, 0) << ok.err;
+    EXPECT_NE(ok.out.find("| cns |"), std::string::npos) << ok.out;
 }
 
 TEST(BadInput, MapsOptionsThatDoNotApplyAreRefused) {
