@@ -213,10 +213,13 @@ void ResolveRenderSettings(RenderOptions& o) {
     ParseSize(o.size, s.width, s.height);
     ParseScale("--iterations-scale", o.iterScale, s.iterScaleMin, s.iterScaleMax);
     ParseScale("--fetches-scale", o.fetchScale, s.fetchScaleMin, s.fetchScaleMax);
-    RefuseIgnoredSettings(s, [&](std::string_view key) {
-        const CLI::Option* opt = o.command->get_option_no_throw(FlagName(key));
-        return opt && opt->count() > 0;
-    });
+    RefuseIgnoredSettings(
+        s,
+        [&](std::string_view key) {
+            const CLI::Option* opt = o.command->get_option_no_throw(FlagName(key));
+            return opt && opt->count() > 0;
+        },
+        o.methods);
     if (!o.viewDir.empty()) s.viewDir = ParseVec3("--view-dir", o.viewDir);
     if (!o.lightDir.empty()) {
         if (o.lightAngle || o.lightAzimuth)

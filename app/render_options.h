@@ -30,6 +30,9 @@ struct RenderOptions {
     std::string viewDir;                ///< X,Y,Z (--view-dir); empty: the settings'
     /// The command the options were added to: which were given (RefuseIgnoredSettings).
     const CLI::App* command = nullptr;
+    /// The methods rendered with these settings when a command renders several
+    /// (safety's --methods); empty: settings.method.
+    std::vector<std::string> methods;
     std::string lightDir;  ///< X,Y,Z (--light-dir); empty: the settings'
     std::optional<float> lightAngle, lightAzimuth;  ///< --light-angle, --light-azimuth
     std::string coneEncoding;     ///< --cone-encoding; empty: the kernel's own

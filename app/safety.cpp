@@ -118,6 +118,7 @@ void RegisterSafetyCommand(CLI::App& root) {
         // them as their options here.
         const ScopedParamNamer names(&SafetyFlagName);
         a->options.settings.method = methods.front();
+        a->options.methods = methods;
         a->options.settings.viewAngle = a->angles.front();
         ResolveRenderSettings(a->options);
         if (a->options.settings.camera == CameraKind::Ortho)

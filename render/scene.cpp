@@ -2,6 +2,7 @@
 // kernel.
 #include "render/scene.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -168,7 +169,28 @@ void ValidateSettings(const RenderSettings& s) {
 }
 
 void RefuseIgnoredSettings(const RenderSettings& s,
-                           const std::function<bool(std::string_view)>& given) {
+                           const std::function<bool(std::string_view)>& given,
+                           std::span<const std::string> methods) {
+    const std::span<const std::string> rendered =
+        methods.empty() ? std::span<const std::string>(&s.method, 1) : methods;
+    for (const char* key : {"cache_dir", "no_cache"}) {
+        if (!given(key)) continue;
+        if (!s.maps.coneMap.empty())
+            throw Error(ParamName(key) + ": applies to generated cone maps; " +
+                        ParamName("cone_map") + " gives the map");
+        const auto generates = [](const std::string& m) {
+            return m != kExactMethod && !FindMethod(m).maps.empty();
+        };
+        if (std::none_of(rendered.begin(), rendered.end(), generates)) {
+            std::string names;
+            for (const std::string& m : rendered) names += (names.empty() ? "" : ",") + m;
+            throw Error(
+                ParamName(key) + ": applies to the cone kernels' generated maps; " +
+                (rendered.size() > 1
+                     ? "none of " + ParamName("method") + " " + names + " reads one"
+                     : ParamName("method") + " " + names + " reads none"));
+        }
+    }
     if (s.camera == CameraKind::Ortho) {
         for (const char* key : {"view_angle", "azimuth", "distance", "fov"})
             if (given(key))

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <functional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -87,9 +88,12 @@ void ValidateSettings(const RenderSettings& settings);
 /// with the orbit camera, and the shadow_steps, shadow_softening and shadow_penumbra
 /// that the shadow kind does not read. `given(key)` says whether the setting of that key
 /// ("view_angle") was given: render asks its options, sweep its configuration's keys.
+/// The map cache (cache_dir, no_cache) is refused where none of `methods` (empty: the
+/// settings' method) generates a cone map: it reads none, or reads cone_map's file.
 /// Throws Error naming the setting (ParamName) and what it applies to.
 void RefuseIgnoredSettings(const RenderSettings& settings,
-                           const std::function<bool(std::string_view)>& given);
+                           const std::function<bool(std::string_view)>& given,
+                           std::span<const std::string> methods = {});
 
 /// The scene's plane: the world square [-0.5,0.5]^2 in the z = 0 plane, two triangles,
 /// normal +z, tangent +x (u), bitangent -y (v), uv = (x + 0.5, 0.5 - y) * tiling, so

@@ -354,6 +354,13 @@ TEST(BadInput, KernelSettingsAreValidated) {
                         {"--shadow-penumbra", "--shadow soft"});
     ExpectRenderFailure("--method relief --set budget=3 --set budget=4",
                         {"--set budget", "given twice"});
+    // The map cache of a method that generates no cone map, or with the map given.
+    ExpectRenderFailure("--method relief --no-cache", {"--no-cache", "--method relief"});
+    ExpectRenderFailure("--method exact --cache-dir c",
+                        {"--cache-dir", "--method exact"});
+    ExpectRenderFailure("--method maxmip --no-cache", {"--no-cache", "--method maxmip"});
+    ExpectRenderFailure("--method csm --cone-map m.png --no-cache",
+                        {"--no-cache", "--cone-map gives the map"});
     // safety varies the orbit camera's view angle: the ortho camera would repeat one
     // view.
     ExpectFailure("safety --map builtin:shapes:16 --size 8x8 --camera ortho",
@@ -370,11 +377,16 @@ TEST(BadInput, KernelSettingsAreValidated) {
              {"--angles 20,95", {"--angles 95"}},
              {"--methods relief --ao cone", {"--ao cone", "--methods relief"}}})
         ExpectFailure("safety --map builtin:shapes:16 --size 8x8 " + args, culprits, d);
+    // The map cache where no method profiled generates a cone map would be ignored.
+    ExpectFailure(
+        "safety --map builtin:shapes:16 --size 8x8 --methods relief,linear "
+        "--no-cache",
+        {"--no-cache", "none of --methods relief,linear"}, d);
     // Its settings are checked with the methods profiled, not render's default method:
     // cns reads the cone-normal map that the cone shadow and AO need.
     const CliResult ok = RunCli(
         "safety --map builtin:shapes:16 --size 8x8 --angles 30 --methods cns --shadow "
-        "cone --ao cone",
+        "cone --ao cone --no-cache",
         d);
     EXPECT_EQ(ok.exitCode, 0) << ok.err;
     EXPECT_NE(ok.out.find("| cns |"), std::string::npos) << ok.out;

@@ -256,7 +256,7 @@ TEST(Cli, ConeMapFromAFileRendersAsTheGeneratedOne) {
     // halves side by side, and eight channels in an EXR).
     fs::path d = Scratch();
     const std::string scene =
-        " --map builtin:shapes:64 --size 64x48 --no-reference --no-cache --quiet";
+        " --map builtin:shapes:64 --size 64x48 --no-reference --quiet";
     struct Case {
         const char* method;
         const char* kind;
@@ -271,9 +271,9 @@ TEST(Cli, ConeMapFromAFileRendersAsTheGeneratedOne) {
         ASSERT_EQ(m.exitCode, 0) << m.err;
         const fs::path gen = d / (std::string(c.method) + "_gen");
         const fs::path ext = d / (std::string(c.method) + "_ext");
-        Result g = RunCli(
-            "render --method " + std::string(c.method) + scene + " --out " + gen.string(),
-            d);
+        Result g = RunCli("render --method " + std::string(c.method) + scene +
+                              " --no-cache --out " + gen.string(),
+                          d);
         ASSERT_EQ(g.exitCode, 0) << g.err;
         Result e = RunCli("render --method " + std::string(c.method) + scene +
                               " --cone-map " + map.string() + " --out " + ext.string(),
