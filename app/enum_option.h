@@ -9,6 +9,9 @@
 
 namespace reliefsim {
 
+/// The name of the validator AddEnumOption gives its option (for code that looks it up).
+inline constexpr const char* kEnumValidatorName = "enum-names";
+
 /// Adds `flag` to cmd, bound to `field`. Its values are the table's names, shown in the
 /// help as `nearest|bilinear|min4` with the field's value at this call as the default;
 /// anything else is refused with one line that names the option, the value and the
@@ -33,7 +36,7 @@ CLI::Option* AddEnumOption(CLI::App* cmd, const std::string& flag, E& field,
         },
         /*validator_desc=*/"");
     return cmd->add_option(flag, field, help)
-        ->transform(validator)
+        ->transform(validator, kEnumValidatorName)
         ->type_name(names.Join("|"))
         ->default_str(std::string(names.Name(field)));
 }

@@ -3,8 +3,10 @@
 #include <exception>
 #include <new>
 #include <string>
+#include <vector>
 
 #include "app/commands.h"
+#include "app/enum_option.h"
 #include "core/error.h"
 #include "core/param_name.h"
 
@@ -13,6 +15,63 @@ namespace {
 /// Every error is one line: embedded newlines (third-party messages) become "; ".
 void PrintError(const std::string& message) {
     std::fprintf(stderr, "reliefsim: error: %s\n", reliefsim::OneLine(message).c_str());
+}
+
+/// An option given an empty value ("--out ''", an unset shell variable) is a mistake,
+/// never "the default" nor "none": every option of every command that takes a value
+/// refuses one, naming the option, before its other checks ("--threads: Value not in
+/// range"), except that an enumerated option lists its names itself ("" is unknown;
+/// must be one of ...).
+void RefuseEmptyValues(CLI::App& app) {
+    for (CLI::Option* o : app.get_options(
+             [](const CLI::Option* o) { return o->get_expected_min() > 0; })) {
+        const CLI::Validator empty(
+            [name = o->get_name()](const std::string& value) {
+                return value.empty() ? "empty value; give one, or leave " + name + " out"
+                                     : std::string();
+            },
+            /*validator_desc=*/"");
+        bool listsNames = true;
+        try {  // CLI11 has no lookup that does not throw
+            o->get_validator(reliefsim::kEnumValidatorName);
+        } catch (const CLI::OptionNotFound&) {
+            listsNames = false;
+        }
+        if (listsNames)
+            o->check(empty);  // after the names'
+        else
+            o->transform(empty);  // first
+    }
+    for (CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
+        RefuseEmptyValues(*sub);
+}
+
+/// "--opt=" as "--opt ''" for an option that takes a value (CLI11 would take the next
+/// argument as its value); a flag's "--quiet=" is refused (CLI11 would set the flag).
+std::vector<std::string> SplitEmptyJoined(const CLI::App& app, int argc, char** argv) {
+    std::vector<std::string> args(argv, argv + argc);
+    const CLI::App* cmd = &app;
+    for (size_t i = 1; i < args.size(); ++i) {
+        if (args[i] == "--") break;  // the rest are not options
+        const auto subs = cmd->get_subcommands(
+            [&](const CLI::App* sub) { return sub->get_name() == args[i]; });
+        if (!subs.empty()) {
+            cmd = subs.front();
+            continue;
+        }
+        if (args[i].size() < 4 || args[i].rfind("--", 0) != 0 ||
+            args[i].find('=') != args[i].size() - 1)
+            continue;
+        const std::string name = args[i].substr(0, args[i].size() - 1);
+        const CLI::Option* o = cmd->get_option_no_throw(name);
+        if (o && o->get_expected_min() == 0)  // "--quiet=$UNSET": not "--quiet"
+            throw CLI::ValidationError(
+                name, "empty value; give " + name + " alone, or leave it out");
+        args[i] = name;
+        args.insert(args.begin() + std::ptrdiff_t(i) + 1, std::string());
+        ++i;
+    }
+    return args;
 }
 
 }  // namespace
@@ -50,28 +109,12 @@ int main(int argc, char** argv) {
                    " (reliefsim COMMAND --help for each)");
         return 2;
     }
-    // An option given an empty value ("--out ''", "--out=": an unset shell variable,
-    // say) is a mistake, never "the default" nor "none": refused, naming the option,
-    // before any command looks at it.
-    for (int i = 2; i < argc; ++i) {
-        const std::string arg = argv[i], prev = argv[i - 1];
-        const bool emptyAfter = arg.empty() && prev.rfind("--", 0) == 0 &&
-                                prev.size() > 2 && prev.find('=') == std::string::npos;
-        const bool emptyJoined = arg.rfind("--", 0) == 0 && arg.size() > 3 &&
-                                 arg.back() == '=' && arg.find('=') == arg.size() - 1;
-        if (emptyAfter || emptyJoined) {
-            const std::string opt = emptyJoined ? arg.substr(0, arg.size() - 1) : prev;
-            // An enumerated option names its values itself ("" is unknown; must be one
-            // of ...): left to it.
-            const CLI::Option* o =
-                known ? app.get_subcommand(argv[1])->get_option_no_throw(opt) : nullptr;
-            if (o && o->get_type_name().find('|') != std::string::npos) continue;
-            PrintError(opt + ": empty value; give one, or leave " + opt + " out");
-            return 2;
-        }
-    }
     try {
-        app.parse(argc, argv);
+        RefuseEmptyValues(app);
+        std::vector<std::string> args = SplitEmptyJoined(app, argc, argv);
+        std::vector<char*> argp;
+        for (std::string& a : args) argp.push_back(a.data());
+        app.parse(int(argp.size()), argp.data());
     } catch (const CLI::CallForHelp& e) {
         return app.exit(e);
     } catch (const CLI::CallForAllHelp& e) {

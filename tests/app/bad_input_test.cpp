@@ -488,6 +488,22 @@ TEST(BadInput, OutputLocationsThatCannotHoldTheOutputsAreRefusedBeforeWork) {
     ExpectFailure("maps --map builtin:shapes:16 --out=", {"--out", "empty"}, d);
     ExpectFailure("render --out " + Q(d / "r") + " --cone-map=", {"--cone-map", "empty"},
                   d, d / "r");
+    // Every option that takes a value, whatever its type and checks, in both forms, and
+    // every command; a flag given "=" with nothing (CLI11 would set it).
+    for (const char* opt : {"--threads", "--view-angle", "--set", "--lanes", "--out"})
+        for (const char* form : {" ''", "="})
+            ExpectFailure("render --size 8x8 --out " + Q(d / "r") + " " + opt + form,
+                          {opt, "empty value"}, d, d / "r");
+    ExpectFailure("render --size 8x8 --out " + Q(d / "r") + " --quiet=",
+                  {"--quiet", "empty value"}, d, d / "r");
+    ExpectFailure("safety --map builtin:shapes:8 --angles=", {"--angles", "empty value"},
+                  d);
+    ExpectFailure("merge --out= " + Q(d / "a"), {"--out", "empty value"}, d);
+    // The joined form with a value still works.
+    const CliResult ok =
+        RunCli("maps --map=builtin:shapes:8 --kind=cone --out=" + Q(d / "j.exr"), d);
+    EXPECT_EQ(ok.exitCode, 0) << ok.err;
+    EXPECT_TRUE(fs::exists(d / "j.exr"));
 }
 
 TEST(BadInput, SummaryNamesTheFileAndRejectsWrongValues) {
