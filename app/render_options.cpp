@@ -216,7 +216,8 @@ void ResolveRenderSettings(RenderOptions& o) {
     RefuseIgnoredSettings(
         s,
         [&](std::string_view key) {
-            const CLI::Option* opt = o.command->get_option_no_throw(FlagName(key));
+            const CLI::Option* opt =
+                o.command ? o.command->get_option_no_throw(FlagName(key)) : nullptr;
             return opt && opt->count() > 0;
         },
         o.methods);

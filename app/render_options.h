@@ -28,7 +28,8 @@ struct RenderOptions {
     std::string size = SizeText(settings.width, settings.height);  ///< WxH
     std::string iterScale, fetchScale;  ///< MIN:MAX; empty: the settings' scale
     std::string viewDir;                ///< X,Y,Z (--view-dir); empty: the settings'
-    /// The command the options were added to: which were given (RefuseIgnoredSettings).
+    /// The command the options were added to: which were given (RefuseIgnoredSettings);
+    /// null where code filled the options in (nothing counts as given then).
     const CLI::App* command = nullptr;
     /// The methods rendered with these settings when a command renders several
     /// (safety's --methods); empty: settings.method.
