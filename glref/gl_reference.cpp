@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
+#include <map>
 #include <sstream>
 #include <type_traits>
 #include <utility>
@@ -92,6 +93,37 @@ GLuint CompileShader(GLenum type, const std::string& source, const char* what) {
     return s;
 }
 
+// The record program: the fixed vertex shader and fragment source `fs`, linked.
+GLuint LinkProgram(const std::string& fs) {
+    const std::string vs =
+        "#version 450 core\n"
+        "layout(location = 0) in vec4 aClip;  // clip position, transformed on the CPU\n"
+        "void main() { gl_Position = aClip; }\n";
+    GLuint v = CompileShader(GL_VERTEX_SHADER, vs, "vertex");
+    GLuint f = 0;
+    try {
+        f = CompileShader(GL_FRAGMENT_SHADER, fs, "fragment");
+    } catch (...) {
+        glDeleteShader(v);
+        throw;
+    }
+    const GLuint program = glCreateProgram();
+    glAttachShader(program, v);
+    glAttachShader(program, f);
+    glLinkProgram(program);
+    glDeleteShader(v);
+    glDeleteShader(f);
+    GLint ok = 0;
+    glGetProgramiv(program, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        char log[4096] = {0};
+        glGetProgramInfoLog(program, sizeof(log), nullptr, log);
+        glDeleteProgram(program);
+        throw Error(std::string("GLSL program: does not link: ") + log);
+    }
+    return program;
+}
+
 // Uploads the kernel's parameters to the uniforms its ParamSpecs name, and its fixed
 // constants; each uniform's GLSL type is read from the linked program.
 void UploadKernelUniforms(GLuint program, const Kernel& kernel) {
@@ -147,9 +179,15 @@ struct GlReference::Impl {
     bool measureLanes = false;
     LaneMeasurement lanesTemplate;
     std::string fragmentSource;
+    /// Linked programs kept for the context's life, keyed by kernel name and fragment
+    /// source: llvmpipe compiles a program's machine code per draw state and keeps it
+    /// with the program, so a scene that repeats a kernel and a texture state reuses it
+    /// (compiling is most of a small comparison's time). The kernel name is in the key
+    /// because Prepare sets the uniforms the kernel names: with it, every uniform a
+    /// cached program had set before is set again, as in a freshly linked program.
+    std::map<std::string, GLuint> programs;
 
     void ReleaseScene() {
-        if (program) glDeleteProgram(program);
         if (vao) glDeleteVertexArrays(1, &vao);
         if (vbo) glDeleteBuffers(1, &vbo);
         if (ibo) glDeleteBuffers(1, &ibo);
@@ -220,6 +258,7 @@ GlReference::GlReference(int lpThreads) : impl_(std::make_unique<Impl>()) {
 GlReference::~GlReference() {
     Impl& m = *impl_;
     m.ReleaseScene();
+    for (const auto& [key, program] : m.programs) glDeleteProgram(program);
     eglMakeCurrent(m.display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     eglDestroyContext(m.display, m.context);
     eglTerminate(m.display);
@@ -227,6 +266,7 @@ GlReference::~GlReference() {
 
 std::string GlReference::Renderer() const { return impl_->renderer; }
 const std::string& GlReference::FragmentSource() const { return impl_->fragmentSource; }
+size_t GlReference::ProgramCount() const { return impl_->programs.size(); }
 
 void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     Impl& m = *impl_;
@@ -295,30 +335,12 @@ void GlReference::Prepare(const DepthField& field, const GlScene& scene) {
     fs += "// ---- shadow.glsl\n" + std::string(EmbeddedGlsl("shadow.glsl"));
     fs += "// ---- record_main.glsl\n" + std::string(EmbeddedGlsl("record_main.glsl"));
     m.fragmentSource = fs;
-    const std::string vs =
-        "#version 450 core\n"
-        "layout(location = 0) in vec4 aClip;  // clip position, transformed on the CPU\n"
-        "void main() { gl_Position = aClip; }\n";
-    GLuint v = CompileShader(GL_VERTEX_SHADER, vs, "vertex");
-    GLuint f = 0;
-    try {
-        f = CompileShader(GL_FRAGMENT_SHADER, fs, "fragment");
-    } catch (...) {
-        glDeleteShader(v);
-        throw;
-    }
-    m.program = glCreateProgram();
-    glAttachShader(m.program, v);
-    glAttachShader(m.program, f);
-    glLinkProgram(m.program);
-    glDeleteShader(v);
-    glDeleteShader(f);
-    GLint ok = 0;
-    glGetProgramiv(m.program, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        char log[4096] = {0};
-        glGetProgramInfoLog(m.program, sizeof(log), nullptr, log);
-        throw Error(std::string("GLSL program: does not link: ") + log);
+    const std::string key = std::string(scene.kernel.Info().name) + "\n" + fs;
+    if (const auto cached = m.programs.find(key); cached != m.programs.end()) {
+        m.program = cached->second;
+    } else {
+        m.program = LinkProgram(fs);
+        m.programs.emplace(key, m.program);
     }
 
     // Geometry: clip positions computed here exactly as the C++ frame loop computes them

@@ -101,8 +101,11 @@ class GlReference {
     std::string Renderer()
         const;  ///< GL_RENDERER, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
 
-    /// Uploads the height texture, assembles and links the twin of scene.kernel, creates
-    /// the RGBA32F targets. Validates: R8 needs field.depth8; min4 is only on R32F.
+    /// Uploads the height texture, assembles the twin of scene.kernel and links it (or
+    /// reuses the program linked for the same kernel and source earlier in this context:
+    /// llvmpipe keeps the machine code it compiled for each texture state with the
+    /// program), creates the RGBA32F targets. Validates: R8 needs field.depth8; min4 is
+    /// only on R32F.
     void Prepare(const DepthField& field, const GlScene& scene);
     /// One draw of the prepared scene followed by glFinish (research/llvmpipe.md §4.1).
     void DrawAndFinish();
@@ -115,6 +118,8 @@ class GlReference {
     /// The fragment shader source assembled for the last Prepare (for docs and
     /// debugging).
     const std::string& FragmentSource() const;
+    /// How many linked programs this context keeps (one per kernel and source).
+    size_t ProgramCount() const;
 
   private:
     struct Impl;
