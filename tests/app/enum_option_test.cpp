@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -110,8 +111,19 @@ TEST(EnumOption, HelpListsTheNamesAndTheDefault) {
 }
 
 TEST(EnumOption, BadValueIsOneLineNamingOptionValueAndNames) {
-    for (const EnumOptionCase& c : Cases())
-        for (const std::string bad : {"frob", "0", "1", "", "=", "=frob"}) {
+    // Every option with an unknown name and an empty value (each option's own validator
+    // and the empty-value check placed after it); numbers and the joined forms
+    // ("--filter=", which CLI11 would read as taking the next argument) with the first
+    // option of each command (they go through the parsing every option shares; each
+    // case is a process, about 0.4 s of loading shared libraries).
+    std::vector<std::string> seen;
+    for (const EnumOptionCase& c : Cases()) {
+        const std::string command = c.command.substr(0, c.command.find(' '));
+        const bool first = std::find(seen.begin(), seen.end(), command) == seen.end();
+        seen.push_back(command);
+        std::vector<std::string> values = {"frob", ""};
+        if (first) values.insert(values.end(), {"0", "1", "=", "=frob"});
+        for (const std::string& bad : values) {
             const fs::path d = Scratch();
             // render requires --out; the others would write nothing here either.
             const std::string out =
@@ -133,6 +145,7 @@ TEST(EnumOption, BadValueIsOneLineNamingOptionValueAndNames) {
                     << name << " in " << r.err;
             EXPECT_FALSE(fs::exists(d / "o")) << args;
         }
+    }
 }
 
 TEST(EnumOption, ChannelLettersMatchInEitherCase) {
