@@ -93,7 +93,8 @@ TEST_P(GlCompareMatrix, BitIdenticalAndLaneCostExact) {
 std::vector<Case> AllCases() {
     std::vector<Case> cases;
     for (TextureFormat format : {TextureFormat::R32F, TextureFormat::R8})
-        for (const KernelInfo* m : Methods()) cases.push_back({std::string(m->name), format});
+        for (const KernelInfo* m : Methods())
+            cases.push_back({std::string(m->name), format});
     return cases;
 }
 
