@@ -219,10 +219,12 @@ std::string TraceCommand(const RenderOptions& o, int x, int y) {
     cmd << " --method " << s.method;
     for (const auto& kv : s.set) cmd << " --set " << kv;
     cmd << " --size " << s.width << "x" << s.height;
-    if (s.camera == CameraKind::Orbit)  // (the ortho camera refuses them)
-        cmd << " --view-angle " << Number(s.viewAngle) << " --azimuth "
-            << Number(s.azimuth) << " --distance " << Number(s.distance) << " --fov "
-            << Number(s.fovY);
+    // Only what the frame reads (glcompare refuses the others: RefuseIgnoredSettings).
+    const auto read = [&](std::string_view key) { return SettingRead(s, key); };
+    if (read("view_angle")) cmd << " --view-angle " << Number(s.viewAngle);
+    if (read("azimuth")) cmd << " --azimuth " << Number(s.azimuth);
+    if (read("distance")) cmd << " --distance " << Number(s.distance);
+    if (read("fov")) cmd << " --fov " << Number(s.fovY);
     cmd << " --depth-scale " << Number(s.depthScale) << " --tiling " << Number(s.tiling)
         << " --filter " << ToString(s.sampler.filter) << " --wrap "
         << ToString(s.sampler.wrap) << " --texture-format "
@@ -231,15 +233,14 @@ std::string TraceCommand(const RenderOptions& o, int x, int y) {
         return Number(v.x) + "," + Number(v.y) + "," + Number(v.z);
     };
     cmd << " --camera " << kCameraNames.Name(s.camera);
-    if (s.camera == CameraKind::Ortho) cmd << " --view-dir " << vec3(s.viewDir);
+    if (read("view_dir")) cmd << " --view-dir " << vec3(s.viewDir);
     cmd << " --light-dir " << vec3(s.lightDir);
     if (s.shadow != ShadowKind::None) {
         cmd << " --shadow " << kShadowNames.Name(s.shadow);
-        if (s.shadow == ShadowKind::Hard || s.shadow == ShadowKind::Cone)
-            cmd << " --shadow-steps " << s.shadowSteps;
-        if (s.shadow == ShadowKind::Soft)
+        if (read("shadow_steps")) cmd << " --shadow-steps " << s.shadowSteps;
+        if (read("shadow_softening"))
             cmd << " --shadow-softening " << Number(s.shadowSoftening);
-        if (s.shadow == ShadowKind::Cone)
+        if (read("shadow_penumbra"))
             cmd << " --shadow-penumbra " << Number(s.shadowPenumbra);
     }
     if (s.ao != AoKind::None) cmd << " --ao " << kAoNames.Name(s.ao);

@@ -168,6 +168,39 @@ void ValidateSettings(const RenderSettings& s) {
     PickLaneWidth(s.lanes);
 }
 
+namespace {
+
+/// The settings that only some cameras or shadow kinds read (RefuseIgnoredSettings,
+/// SettingRead).
+struct SettingRule {
+    const char* key;
+    bool (*read)(const RenderSettings&);
+    const char* setting;    ///< the setting that decides: "camera" or "shadow"
+    const char* appliesTo;  ///< its values that read the key
+    const char* instead;    ///< what the other values read instead, or null
+};
+
+bool Orbit(const RenderSettings& s) { return s.camera == CameraKind::Orbit; }
+bool Ortho(const RenderSettings& s) { return s.camera == CameraKind::Ortho; }
+bool HardOrCone(const RenderSettings& s) {
+    return s.shadow == ShadowKind::Hard || s.shadow == ShadowKind::Cone;
+}
+bool Soft(const RenderSettings& s) { return s.shadow == ShadowKind::Soft; }
+bool ConeShadow(const RenderSettings& s) { return s.shadow == ShadowKind::Cone; }
+
+constexpr SettingRule kSettingRules[] = {
+    {"view_angle", Orbit, "camera", "orbit", "view_dir"},
+    {"azimuth", Orbit, "camera", "orbit", "view_dir"},
+    {"distance", Orbit, "camera", "orbit", "view_dir"},
+    {"fov", Orbit, "camera", "orbit", "view_dir"},
+    {"view_dir", Ortho, "camera", "ortho", nullptr},
+    {"shadow_steps", HardOrCone, "shadow", "hard or cone", nullptr},
+    {"shadow_softening", Soft, "shadow", "soft", nullptr},
+    {"shadow_penumbra", ConeShadow, "shadow", "cone", nullptr},
+};
+
+}  // namespace
+
 void RefuseIgnoredSettings(const RenderSettings& s,
                            const std::function<bool(std::string_view)>& given,
                            std::span<const std::string> methods) {
@@ -191,31 +224,22 @@ void RefuseIgnoredSettings(const RenderSettings& s,
                      : ParamName("method") + " " + names + " reads none"));
         }
     }
-    if (s.camera == CameraKind::Ortho) {
-        for (const char* key : {"view_angle", "azimuth", "distance", "fov"})
-            if (given(key))
-                throw Error(ParamName(key) + ": applies to " + ParamName("camera") +
-                            " orbit; the ortho camera looks along " +
-                            ParamName("view_dir"));
-    } else if (given("view_dir")) {
-        throw Error(ParamName("view_dir") + ": applies to " + ParamName("camera") +
-                    " ortho, not " + ParamName("camera") + " " +
-                    std::string(kCameraNames.Name(s.camera)));
+    for (const SettingRule& r : kSettingRules) {
+        if (!given(r.key) || r.read(s)) continue;
+        const std::string current = r.setting == std::string_view("camera")
+                                        ? std::string(kCameraNames.Name(s.camera))
+                                        : std::string(kShadowNames.Name(s.shadow));
+        throw Error(ParamName(r.key) + ": applies to " + ParamName(r.setting) + " " +
+                    r.appliesTo + ", not " + ParamName(r.setting) + " " + current +
+                    (r.instead ? std::string(", which reads ") + ParamName(r.instead)
+                               : std::string()));
     }
-    const struct {
-        const char* key;
-        bool read;
-        const char* kinds;
-    } shadowKeys[] = {
-        {"shadow_steps", s.shadow == ShadowKind::Hard || s.shadow == ShadowKind::Cone,
-         "hard or cone"},
-        {"shadow_softening", s.shadow == ShadowKind::Soft, "soft"},
-        {"shadow_penumbra", s.shadow == ShadowKind::Cone, "cone"}};
-    for (const auto& k : shadowKeys)
-        if (!k.read && given(k.key))
-            throw Error(ParamName(k.key) + ": applies to " + ParamName("shadow") + " " +
-                        k.kinds + ", not " + ParamName("shadow") + " " +
-                        std::string(kShadowNames.Name(s.shadow)));
+}
+
+bool SettingRead(const RenderSettings& s, std::string_view key) {
+    for (const SettingRule& r : kSettingRules)
+        if (r.key == key) return r.read(s);
+    return true;
 }
 
 Mesh MakePlane(float tiling) {

@@ -95,6 +95,12 @@ void RefuseIgnoredSettings(const RenderSettings& settings,
                            const std::function<bool(std::string_view)>& given,
                            std::span<const std::string> methods = {});
 
+/// Whether a render with these settings reads the setting of `key` ("view_angle"): false
+/// for the orbit camera's view_angle, azimuth, distance and fov with the ortho camera,
+/// view_dir with the orbit camera, and the shadow settings the shadow kind does not read
+/// (the rules RefuseIgnoredSettings applies); true for every other key.
+bool SettingRead(const RenderSettings& settings, std::string_view key);
+
 /// The scene's plane: the world square [-0.5,0.5]^2 in the z = 0 plane, two triangles,
 /// normal +z, tangent +x (u), bitangent -y (v), uv = (x + 0.5, 0.5 - y) * tiling, so
 /// texel row 0 (the image's top row) lies on the far edge (+y) for azimuth 0. PixelToRay

@@ -510,6 +510,28 @@ TEST(GlCompare, TraceCommandReproducesTheScene) {
     // The orbit camera's options, which the ortho camera refuses, are left out.
     for (const char* part : {"--view-angle", "--azimuth", "--distance", "--fov"})
         EXPECT_EQ(all.find(part), std::string::npos) << part << " in " << all;
+    // Each camera and shadow option is there exactly when the frame reads it (glcompare
+    // refuses the others), for every camera and shadow kind.
+    for (CameraKind camera : {CameraKind::Orbit, CameraKind::Ortho})
+        for (ShadowKind shadow :
+             {ShadowKind::None, ShadowKind::Hard, ShadowKind::Soft, ShadowKind::Cone}) {
+            RenderOptions k;
+            k.settings.method = shadow == ShadowKind::Cone ? "cns" : "relief";
+            k.size = "16x16";
+            k.settings.camera = camera;
+            k.settings.shadow = shadow;
+            ResolveRenderSettings(k);
+            const std::string line = TraceCommand(k, 0, 0);
+            for (std::string key :
+                 {"view_angle", "azimuth", "distance", "fov", "view_dir", "shadow_steps",
+                  "shadow_softening", "shadow_penumbra"}) {
+                std::string flag = "--" + key + " ";
+                std::replace(flag.begin(), flag.end(), '_', '-');
+                EXPECT_EQ(line.find(flag) != std::string::npos,
+                          SettingRead(k.settings, key))
+                    << flag << " in " << line;
+            }
+        }
 }
 
 TEST(GlReference, EmbedsEveryGlslTwin) {

@@ -256,8 +256,8 @@ TEST(LaneGroupMaps, TotalEqualsTheExecutedWarpCost) {
 }
 
 // A setting is refused exactly when the render ignores it: changing its value changes
-// the frame (colour, hits, visibility) unless RefuseIgnoredSettings refuses it, for
-// every camera and shadow kind.
+// the frame (colour, hits, visibility) unless RefuseIgnoredSettings refuses it and
+// SettingRead says it is not read, for every camera and shadow kind.
 TEST(IgnoredSettings, RefusedExactlyWhenTheFrameIgnoresThem) {
     const DepthField field = MakeBuiltinMap("builtin:bumps:32");
     const std::pair<const char*, void (*)(RenderSettings&)> changes[] = {
@@ -301,6 +301,7 @@ TEST(IgnoredSettings, RefusedExactlyWhenTheFrameIgnoresThem) {
                         << e.what();
                 }
                 EXPECT_EQ(refused, ignored);
+                EXPECT_EQ(SettingRead(s, key), !ignored);
             }
         }
 }
