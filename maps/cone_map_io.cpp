@@ -2,12 +2,11 @@
 // 3).
 #include <OpenImageIO/imageio.h>
 
-#include <cctype>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 
 #include "core/error.h"
+#include "core/file_extension.h"
 #include "core/param_name.h"
 #include "maps/cone_map.h"
 #include "texture/image_io.h"
@@ -16,17 +15,8 @@ namespace reliefsim {
 
 namespace OIIO = OIIO_NAMESPACE;
 
-namespace {
-
-std::string Lower(std::string s) {
-    for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return s;
-}
-
-}  // namespace
-
 ConeMapFormat ConeMapFormatOf(const std::string& path) {
-    const std::string ext = Lower(std::filesystem::path(path).extension().string());
+    const std::string ext = LowerExtension(path);
     if (ext == ".exr") return ConeMapFormat::Exr;
     if (ext == ".png") return ConeMapFormat::Png;
     throw Error(ParamName("out") + " \"" + path +

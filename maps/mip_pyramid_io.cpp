@@ -3,12 +3,12 @@
 #include <OpenImageIO/imageio.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <filesystem>
 #include <memory>
 
 #include "core/error.h"
+#include "core/file_extension.h"
 #include "core/output_set.h"
 #include "maps/mip_pyramid.h"
 
@@ -22,12 +22,6 @@ constexpr int kMaxLevelSide = 1 << 16;  // sanity bound on level 0 read from a f
 constexpr int kTileSize = 64;           // EXR tile side; MIP-mapped EXRs must be tiled
 
 std::string Quote(const std::string& s) { return "\"" + s + "\""; }
-
-std::string LowerExtension(const std::string& path) {
-    std::string ext = std::filesystem::path(path).extension().string();
-    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-    return ext;
-}
 
 std::string SizeText(int w, int h) { return std::to_string(w) + "x" + std::to_string(h); }
 
