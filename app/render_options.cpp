@@ -231,8 +231,8 @@ void ResolveRenderSettings(RenderOptions& o) {
     } else if (o.lightAngle || o.lightAzimuth) {
         if (o.lightAngle && !std::isfinite(*o.lightAngle))
             throw Error("--light-angle: must be a finite number in [0, 90)");
-        if (o.lightAzimuth && !std::isfinite(*o.lightAzimuth))
-            throw Error("--light-azimuth: must be finite");
+        if (o.lightAzimuth && !(std::fabs(*o.lightAzimuth) <= 1e6f))  // as --azimuth
+            throw Error("--light-azimuth: must be a finite angle in [-1e6, 1e6] degrees");
         const double a = double(o.lightAngle.value_or(45.0f)) * kPi / 180.0,
                      b = double(o.lightAzimuth.value_or(0.0f)) * kPi / 180.0;
         s.lightDir = glm::vec3(float(std::sin(a) * std::cos(b)),

@@ -407,6 +407,10 @@ TEST(Cli, BadLightsAreOneError) {
     ExpectCleanFailure(r + "--light-angle -1", "--light-angle");
     ExpectCleanFailure(r + "--light-angle nan", "--light-angle");
     ExpectCleanFailure(r + "--light-azimuth inf", "--light-azimuth");
+    ExpectCleanFailure(r + "--light-azimuth 1e30",
+                       "--light-azimuth: must be a finite angle");
+    ExpectCleanFailure(r + "--light-azimuth -2e6",
+                       "--light-azimuth: must be a finite angle");
 }
 
 TEST(Cli, LightAnglesAreTheLightDirection) {
