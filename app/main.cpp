@@ -1,8 +1,12 @@
 // reliefsim: the command line.
+#include <algorithm>
+#include <charconv>
 #include <cstdio>
 #include <exception>
 #include <new>
 #include <string>
+#include <string_view>
+#include <system_error>
 #include <vector>
 
 #include "app/commands.h"
@@ -44,6 +48,54 @@ void RefuseEmptyValues(CLI::App& app) {
     }
     for (CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
         RefuseEmptyValues(*sub);
+}
+
+/// Numbers on the command line are decimal, as in --set and the sweep's configurations:
+/// CLI11 alone reads "0x10" as 16, "010" as 8 (octal) and "0x1p3" as 8, and refuses "5 "
+/// as out of range. Every integer option (type INT...) takes an optional sign and decimal
+/// digits, handed on without leading zeros; every floating-point one (FLOAT...) takes
+/// what std::from_chars reads as a decimal number, whole, with an optional leading '+'
+/// (its own checks refuse nan, inf and values out of range). Applied first, after the
+/// empty-value check, which passes "" on.
+void RequireDecimalNumbers(CLI::App& app) {
+    for (CLI::Option* o : app.get_options(
+             [](const CLI::Option* o) { return o->get_expected_min() > 0; })) {
+        const std::string type = o->get_type_name();
+        const bool integer = type.rfind("INT", 0) == 0;
+        if (!integer && type.rfind("FLOAT", 0) != 0) continue;
+        o->transform(CLI::Validator(
+            [integer](std::string& value) -> std::string {
+                if (value.empty()) return {};
+                std::string_view v = value;
+                std::string sign;
+                if (v.front() == '+' || v.front() == '-') {
+                    if (v.front() == '-') sign = "-";
+                    v.remove_prefix(1);
+                }
+                if (integer) {
+                    const bool digits =
+                        !v.empty() && std::all_of(v.begin(), v.end(), [](char c) {
+                            return c >= '0' && c <= '9';
+                        });
+                    if (!digits) return "\"" + value + "\" is not a decimal integer";
+                    while (v.size() > 1 && v.front() == '0') v.remove_prefix(1);
+                    value = sign + std::string(v);
+                    return {};
+                }
+                double d = 0;
+                const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), d);
+                const bool whole =
+                    end == v.data() + v.size() &&
+                    (ec == std::errc() || ec == std::errc::result_out_of_range);
+                if (v.empty() || v.front() == '+' || v.front() == '-' || !whole)
+                    return "\"" + value + "\" is not a decimal number";
+                value = sign + std::string(v);
+                return {};
+            },
+            /*validator_desc=*/""));
+    }
+    for (CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
+        RequireDecimalNumbers(*sub);
 }
 
 /// "--opt=" as "--opt ''" for an option that takes a value (CLI11 would take the next
@@ -111,6 +163,7 @@ int main(int argc, char** argv) {
     }
     try {
         RefuseEmptyValues(app);
+        RequireDecimalNumbers(app);
         std::vector<std::string> args = SplitEmptyJoined(app, argc, argv);
         std::vector<char*> argp;
         for (std::string& a : args) argp.push_back(a.data());
