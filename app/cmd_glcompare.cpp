@@ -9,6 +9,7 @@
 #include "app/commands.h"
 #include "app/glcompare.h"
 #include "core/error.h"
+#include "core/parse.h"
 #include "metrics/heatmap.h"
 #include "raster/camera.h"
 #include "raster/rasterizer.h"
@@ -25,12 +26,6 @@ std::string Hex(float f) {
     std::memcpy(&b, &f, sizeof b);
     char buf[64];
     std::snprintf(buf, sizeof buf, "%.9g (0x%08" PRIx32 ")", double(f), b);
-    return buf;
-}
-
-std::string Number(float f) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "%.9g", double(f));
     return buf;
 }
 
@@ -221,16 +216,16 @@ std::string TraceCommand(const RenderOptions& o, int x, int y) {
     cmd << " --size " << s.width << "x" << s.height;
     // Only what the frame reads (glcompare refuses the others: RefuseIgnoredSettings).
     const auto read = [&](std::string_view key) { return SettingRead(s, key); };
-    if (read("view_angle")) cmd << " --view-angle " << Number(s.viewAngle);
-    if (read("azimuth")) cmd << " --azimuth " << Number(s.azimuth);
-    if (read("distance")) cmd << " --distance " << Number(s.distance);
-    if (read("fov")) cmd << " --fov " << Number(s.fovY);
-    cmd << " --depth-scale " << Number(s.depthScale) << " --tiling " << Number(s.tiling)
-        << " --filter " << ToString(s.sampler.filter) << " --wrap "
+    if (read("view_angle")) cmd << " --view-angle " << FloatText(s.viewAngle);
+    if (read("azimuth")) cmd << " --azimuth " << FloatText(s.azimuth);
+    if (read("distance")) cmd << " --distance " << FloatText(s.distance);
+    if (read("fov")) cmd << " --fov " << FloatText(s.fovY);
+    cmd << " --depth-scale " << FloatText(s.depthScale) << " --tiling "
+        << FloatText(s.tiling) << " --filter " << ToString(s.sampler.filter) << " --wrap "
         << ToString(s.sampler.wrap) << " --texture-format "
         << kTextureFormatNames.Name(s.sampler.precision);
     auto vec3 = [](const glm::vec3& v) {
-        return Number(v.x) + "," + Number(v.y) + "," + Number(v.z);
+        return FloatText(v.x) + "," + FloatText(v.y) + "," + FloatText(v.z);
     };
     cmd << " --camera " << kCameraNames.Name(s.camera);
     if (read("view_dir")) cmd << " --view-dir " << vec3(s.viewDir);
@@ -239,9 +234,9 @@ std::string TraceCommand(const RenderOptions& o, int x, int y) {
         cmd << " --shadow " << kShadowNames.Name(s.shadow);
         if (read("shadow_steps")) cmd << " --shadow-steps " << s.shadowSteps;
         if (read("shadow_softening"))
-            cmd << " --shadow-softening " << Number(s.shadowSoftening);
+            cmd << " --shadow-softening " << FloatText(s.shadowSoftening);
         if (read("shadow_penumbra"))
-            cmd << " --shadow-penumbra " << Number(s.shadowPenumbra);
+            cmd << " --shadow-penumbra " << FloatText(s.shadowPenumbra);
     }
     if (s.ao != AoKind::None) cmd << " --ao " << kAoNames.Name(s.ao);
     // The cone map as it was made or given.

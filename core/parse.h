@@ -1,10 +1,12 @@
 // Strict parsing of numbers given as text (command line, key=value settings, specs): the
 // whole text must be the number, and integers are range-checked before they are narrowed.
+// And the way back for floats: FloatText, which ParseFiniteFloat reads as the same float.
 #pragma once
 
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -55,14 +57,25 @@ inline int64_t ParseIntInRange(std::string_view text, int64_t lo, int64_t hi,
 }
 
 /// A finite decimal floating-point number that is the whole of `text`; nullopt otherwise
-/// (also for "inf", "nan" and values that overflow a float).
+/// (also for "inf", "nan" and values that overflow a float: those that round to infinity,
+/// at or beyond 2^128 - 2^103, halfway between the largest float and 2^128; the text of
+/// the largest float, "3.40282347e+38", is a little above it and reads as it).
 inline std::optional<float> ParseFiniteFloat(std::string_view text) {
     double v = 0.0;
     auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
     if (ec != std::errc() || ptr != text.data() + text.size() || text.empty() ||
-        !std::isfinite(v) || std::fabs(v) > 3.4028234663852886e38)
+        !(std::fabs(v) < 0x1.ffffffp+127))
         return std::nullopt;
     return float(v);
+}
+
+/// A float as decimal text that reads back as the same float (nine significant digits,
+/// "%.9g": 0.1f is "0.100000001", 30 is "30"): for messages and commands that repeat a
+/// value.
+inline std::string FloatText(float v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.9g", double(v));
+    return buf;
 }
 
 }  // namespace reliefsim

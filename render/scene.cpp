@@ -4,41 +4,36 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 
 #include "core/error.h"
 #include "core/param_name.h"
+#include "core/parse.h"
 #include "render/batch.h"
 
 namespace reliefsim {
 
 void ValidateSettings(const RenderSettings& s) {
     auto bad = [](const std::string& what) { throw Error(what); };
-    auto num = [](float v) {
-        char buf[32];
-        std::snprintf(buf, sizeof buf, "%.9g", double(v));
-        return std::string(buf);
-    };
     if (s.width < 1 || s.height < 1 || s.width > 16384 || s.height > 16384)
         bad(ParamName("size") + " " + std::to_string(s.width) + "x" +
             std::to_string(s.height) + ": each side must be in [1, 16384]");
     if (!(s.viewAngle >= 0.0f && s.viewAngle < 90.0f))
-        bad(ParamName("view_angle") + " " + num(s.viewAngle) +
+        bad(ParamName("view_angle") + " " + FloatText(s.viewAngle) +
             ": must be in [0, 90) degrees");
     if (!(std::fabs(s.azimuth) <= 1e6f))
-        bad(ParamName("azimuth") + " " + num(s.azimuth) +
+        bad(ParamName("azimuth") + " " + FloatText(s.azimuth) +
             ": must be a finite angle in [-1e6, 1e6] degrees");
     if (!(s.depthScale > 0.0f && s.depthScale <= kMaxDepthScale))
-        bad(ParamName("depth_scale") + " " + num(s.depthScale) + ": must be in (0, " +
-            num(kMaxDepthScale) + "] plane widths");
+        bad(ParamName("depth_scale") + " " + FloatText(s.depthScale) +
+            ": must be in (0, " + FloatText(kMaxDepthScale) + "] plane widths");
     if (!(s.tiling > 0.0f && s.tiling <= kMaxTiling))
-        bad(ParamName("tiling") + " " + num(s.tiling) + ": must be in (0, " +
-            num(kMaxTiling) + "]");
+        bad(ParamName("tiling") + " " + FloatText(s.tiling) + ": must be in (0, " +
+            FloatText(kMaxTiling) + "]");
     if (!(s.distance >= kMinDistance && s.distance <= kMaxDistance))
-        bad(ParamName("distance") + " " + num(s.distance) + ": must be in [" +
-            num(kMinDistance) + ", " + num(kMaxDistance) + "] plane widths");
+        bad(ParamName("distance") + " " + FloatText(s.distance) + ": must be in [" +
+            FloatText(kMinDistance) + ", " + FloatText(kMaxDistance) + "] plane widths");
     if (!(s.fovY > 0.0f && s.fovY < 180.0f))
-        bad(ParamName("fov") + " " + num(s.fovY) + ": must be in (0, 180) degrees");
+        bad(ParamName("fov") + " " + FloatText(s.fovY) + ": must be in (0, 180) degrees");
     if (s.threads < 0 || s.threads > kMaxThreads)
         bad(ParamName("threads") + " " + std::to_string(s.threads) + ": must be in [0, " +
             std::to_string(kMaxThreads) + "]");
@@ -53,11 +48,11 @@ void ValidateSettings(const RenderSettings& s) {
         bad(ParamName("shadow_steps") + " " + std::to_string(s.shadowSteps) +
             ": must be in [1, " + std::to_string(kMaxShadowSteps) + "]");
     if (!(s.shadowSoftening >= 0.0f && s.shadowSoftening <= kMaxShadowSoftening))
-        bad(ParamName("shadow_softening") + " " + num(s.shadowSoftening) +
-            ": must be in [0, " + num(kMaxShadowSoftening) + "]");
+        bad(ParamName("shadow_softening") + " " + FloatText(s.shadowSoftening) +
+            ": must be in [0, " + FloatText(kMaxShadowSoftening) + "]");
     if (!(s.shadowPenumbra >= 0.0f && s.shadowPenumbra <= kMaxShadowPenumbra))
-        bad(ParamName("shadow_penumbra") + " " + num(s.shadowPenumbra) +
-            ": must be in [0, " + num(kMaxShadowPenumbra) + "]");
+        bad(ParamName("shadow_penumbra") + " " + FloatText(s.shadowPenumbra) +
+            ": must be in [0, " + FloatText(kMaxShadowPenumbra) + "]");
     if (s.ao == AoKind::Cone) {
         // The AO term reads the cone of csm's or cns's map at the hit (004 §4.5: the
         // relaxed cones of rcs and rcns "did not allow generating good approximations").
@@ -88,7 +83,8 @@ void ValidateSettings(const RenderSettings& s) {
     }
     if (s.camera == CameraKind::Ortho) {
         const glm::vec3 d = s.viewDir;
-        const std::string text = num(d.x) + "," + num(d.y) + "," + num(d.z);
+        const std::string text =
+            FloatText(d.x) + "," + FloatText(d.y) + "," + FloatText(d.z);
         if (!(std::isfinite(d.x) && std::isfinite(d.y) && std::isfinite(d.z)))
             bad(ParamName("view_dir") + " " + text + ": must be finite");
         if (!(d.z < 0.0f))
@@ -98,13 +94,14 @@ void ValidateSettings(const RenderSettings& s) {
             bad(ParamName("view_dir") + " " + text +
                 ": within 89.94 degrees of the normal (|XY| <= 1000 |Z|)");
         if (s.tiling != 1.0f)
-            bad(ParamName("tiling") + " " + num(s.tiling) +
+            bad(ParamName("tiling") + " " + FloatText(s.tiling) +
                 ": the ortho camera frames exactly one tile; leave " +
                 ParamName("tiling") + " at 1");
     }
     {
         const glm::vec3 l = s.lightDir;
-        const std::string text = num(l.x) + "," + num(l.y) + "," + num(l.z);
+        const std::string text =
+            FloatText(l.x) + "," + FloatText(l.y) + "," + FloatText(l.z);
         if (!(std::isfinite(l.x) && std::isfinite(l.y) && std::isfinite(l.z)))
             bad(ParamName("light_dir") + " " + text + ": must be finite");
         if (!(l.z > 0.0f))
