@@ -1,18 +1,15 @@
 // reliefsim: the command line.
-#include <algorithm>
-#include <charconv>
 #include <cstdio>
 #include <exception>
 #include <new>
 #include <string>
-#include <string_view>
-#include <system_error>
 #include <vector>
 
 #include "app/commands.h"
 #include "app/enum_option.h"
 #include "core/error.h"
 #include "core/param_name.h"
+#include "core/parse.h"
 
 namespace {
 
@@ -50,13 +47,14 @@ void RefuseEmptyValues(CLI::App& app) {
         RefuseEmptyValues(*sub);
 }
 
-/// Numbers on the command line are decimal, as in --set and the sweep's configurations:
-/// CLI11 alone reads "0x10" as 16, "010" as 8 (octal) and "0x1p3" as 8, and refuses "5 "
-/// as out of range. Every integer option (type INT...) takes an optional sign and decimal
-/// digits, handed on without leading zeros; every floating-point one (FLOAT...) takes
-/// what std::from_chars reads as a decimal number, whole, with an optional leading '+'
-/// (its own checks refuse nan, inf and values out of range). Applied first, after the
-/// empty-value check, which passes "" on.
+/// Numbers on the command line are decimal, by the same rules as --set, --size and the
+/// other options core/parse.h reads: CLI11 alone reads "0x10" as 16, "010" as 8 (octal),
+/// "0x1p3" as 8 and "+5" as 5, and refuses "5 " as out of range. Every integer option
+/// (type INT...) takes an optional '-' and decimal digits, handed on without leading
+/// zeros ("010" is 10); every floating-point one (FLOAT...) takes what std::from_chars
+/// reads as a decimal number, whole (nan, inf and values out of range go on to the
+/// option's own checks, which name them). Applied first, after the empty-value check,
+/// which passes "" on.
 void RequireDecimalNumbers(CLI::App& app) {
     for (CLI::Option* o : app.get_options(
              [](const CLI::Option* o) { return o->get_expected_min() > 0; })) {
@@ -66,30 +64,16 @@ void RequireDecimalNumbers(CLI::App& app) {
         o->transform(CLI::Validator(
             [integer](std::string& value) -> std::string {
                 if (value.empty()) return {};
-                std::string_view v = value;
-                std::string sign;
-                if (v.front() == '+' || v.front() == '-') {
-                    if (v.front() == '-') sign = "-";
-                    v.remove_prefix(1);
-                }
                 if (integer) {
-                    const bool digits =
-                        !v.empty() && std::all_of(v.begin(), v.end(), [](char c) {
-                            return c >= '0' && c <= '9';
-                        });
-                    if (!digits) return "\"" + value + "\" is not a decimal integer";
-                    while (v.size() > 1 && v.front() == '0') v.remove_prefix(1);
-                    value = sign + std::string(v);
+                    if (!reliefsim::LooksLikeInteger(value))
+                        return "\"" + value + "\" is not a decimal integer";
+                    // Out of int64: left as it is, for the option's range message.
+                    if (const auto v = reliefsim::ParseInt64(value))
+                        value = std::to_string(*v);
                     return {};
                 }
-                double d = 0;
-                const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), d);
-                const bool whole =
-                    end == v.data() + v.size() &&
-                    (ec == std::errc() || ec == std::errc::result_out_of_range);
-                if (v.empty() || v.front() == '+' || v.front() == '-' || !whole)
+                if (!reliefsim::LooksLikeDecimal(value))
                     return "\"" + value + "\" is not a decimal number";
-                value = sign + std::string(v);
                 return {};
             },
             /*validator_desc=*/""));

@@ -35,6 +35,16 @@ inline bool LooksLikeInteger(std::string_view text) {
     return true;
 }
 
+/// True when the whole of `text` is a decimal floating-point number as std::from_chars
+/// reads one (optional '-', digits with an optional point and exponent; also "inf" and
+/// "nan", and values beyond double's range): no '+', spaces, hex or digit separators.
+inline bool LooksLikeDecimal(std::string_view text) {
+    double v = 0.0;
+    auto [ptr, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+    return !text.empty() && ptr == text.data() + text.size() &&
+           (ec == std::errc() || ec == std::errc::result_out_of_range);
+}
+
 /// Parses an integer in [lo, hi]; otherwise throws Error "SUBJECT "TEXT": WHY; expected
 /// an integer in [lo, hi]". `subject` names the option or parameter (e.g. "--size
 /// width").

@@ -55,6 +55,15 @@ TEST(ParseFiniteFloat, TheWholeTextAndFiniteOnly) {
     EXPECT_FALSE(ParseFiniteFloat("3.5e38"));
 }
 
+TEST(LooksLikeDecimal, FromCharsWholeTextOnly) {
+    for (const char* good :
+         {"1", "-1", "0.5", ".5", "5.", "1e3", "-2.5E-3", "010", "1e999", "inf", "nan"})
+        EXPECT_TRUE(LooksLikeDecimal(good)) << good;
+    for (const char* bad :
+         {"", "+1", " 1", "1 ", "0x10", "0x1p3", "1_0", "1,5", "--1", "-", "e3", "1e"})
+        EXPECT_FALSE(LooksLikeDecimal(bad)) << bad;
+}
+
 TEST(ParseIntInRange, DecimalOnlyAndNamedOnError) {
     EXPECT_EQ(ParseIntInRange("010", 0, 100, "--n"), 10);
     EXPECT_EQ(ParseIntInRange("-5", -10, 10, "--n"), -5);
