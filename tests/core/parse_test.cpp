@@ -56,8 +56,8 @@ TEST(ParseFiniteFloat, TheWholeTextAndFiniteOnly) {
 }
 
 TEST(LooksLikeDecimal, FromCharsWholeTextOnly) {
-    for (const char* good :
-         {"1", "-1", "0.5", ".5", "5.", "1e3", "-2.5E-3", "010", "1e999", "inf", "nan"})
+    for (const char* good : {"1", "-1", "0.5", ".5", "5.", "1e3", "-2.5E-3", "010",
+                             "1e999", "3.40282347e+38", "inf", "nan"})
         EXPECT_TRUE(LooksLikeDecimal(good)) << good;
     for (const char* bad :
          {"", "+1", " 1", "1 ", "0x10", "0x1p3", "1_0", "1,5", "--1", "-", "e3", "1e"})
