@@ -57,13 +57,15 @@ struct Pair {
     double dist;  ///< uv distance
 };
 
-/// The map of `name` at n x n: a built-in, or a ../shared/data map resized bilinearly
-/// and stored in 8 bits (as the benchmarks' rocks 8-bit); none when absent.
-std::optional<DepthField> MakeMap(const std::string& name, int n) {
-    if (name == "shapes" || name == "noise" || name == "bumps" || name == "steps")
-        return MakeBuiltinMap(name, n, n);
-    const auto shared = bench::SharedMap(name);
-    if (!shared) return std::nullopt;
+bool IsBuiltin(const std::string& name) {
+    return name == "shapes" || name == "noise" || name == "bumps" || name == "steps";
+}
+
+/// The map at n x n: the built-in `name`, or `shared` (a ../shared/data map, loaded
+/// once) resized bilinearly and stored in 8 bits (as the benchmarks' rocks 8-bit).
+DepthField MapAt(const std::string& name, const std::optional<DepthField>& shared,
+                 int n) {
+    if (!shared) return MakeBuiltinMap(name, n, n);
     return bench::Quantize(bench::Upsample(*shared, n), 8);
 }
 
@@ -109,7 +111,10 @@ double ContinuousExitRatio(const DepthField& f, int i, int j, double s, const Pa
 }
 
 int Run(const std::string& mapName, int maxSize, int apexes) {
-    if (!MakeMap(mapName, 8)) {
+    const bool builtin = IsBuiltin(mapName);
+    const std::optional<DepthField> shared =
+        builtin ? std::nullopt : bench::SharedMap(mapName);
+    if (!builtin && !shared) {
         if (!std::filesystem::exists(RS_SHARED_DATA)) {
             std::printf("relaxed_floor_study: --map %s: skipped, %s is absent\n",
                         mapName.c_str(), RS_SHARED_DATA);
@@ -121,19 +126,15 @@ int Run(const std::string& mapName, int maxSize, int apexes) {
                      mapName.c_str(), RS_SHARED_DATA, mapName.c_str());
         return 2;
     }
-    std::printf("map: %s at n² (%s); %d x %d apexes per size; per apex:\n",
-                mapName.c_str(),
-                mapName == "shapes" || mapName == "noise" || mapName == "bumps" ||
-                        mapName == "steps"
-                    ? "built-in, float"
-                    : "resized bilinearly, 8-bit",
-                apexes, apexes);
+    std::printf(
+        "map: %s at n² (%s); %d x %d apexes per size; per apex:\n", mapName.c_str(),
+        builtin ? "built-in, float" : "resized bilinearly, 8-bit", apexes, apexes);
     std::printf("%6s %7s | %10s %10s %8s %8s | %s\n", "n", "apexes", "above", "distance",
                 "floor", "samples", "floor x (vs n/2)");
     int failures = 0;
     double lastFloor = 0;
     for (int n = 128; n <= maxSize; n *= 2) {
-        const DepthField f = *MakeMap(mapName, n);
+        const DepthField f = MapAt(mapName, shared, n);
         const detail::Geometry g = detail::MakeGeometry(n, n);
         std::vector<Pair> offs;
         for (const detail::Offset& o : detail::MakeOffsets(g, ConeKind::Cone))
