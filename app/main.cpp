@@ -1,6 +1,7 @@
 // reliefsim: the command line.
 #include <cstdio>
 #include <exception>
+#include <functional>
 #include <new>
 #include <string>
 #include <vector>
@@ -18,14 +19,22 @@ void PrintError(const std::string& message) {
     std::fprintf(stderr, "reliefsim: error: %s\n", reliefsim::OneLine(message).c_str());
 }
 
+/// `fn` for every option that takes a value, of `app` and of all its subcommands.
+void ForEachValueOption(CLI::App& app, const std::function<void(CLI::Option*)>& fn) {
+    for (CLI::Option* o :
+         app.get_options([](const CLI::Option* o) { return o->get_expected_min() > 0; }))
+        fn(o);
+    for (CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
+        ForEachValueOption(*sub, fn);
+}
+
 /// An option given an empty value ("--out ''", an unset shell variable) is a mistake,
 /// never "the default" nor "none": every option of every command that takes a value
 /// refuses one, naming the option, before its other checks ("--threads: Value not in
 /// range"), except that an enumerated option lists its names itself ("" is unknown;
 /// must be one of ...).
 void RefuseEmptyValues(CLI::App& app) {
-    for (CLI::Option* o : app.get_options(
-             [](const CLI::Option* o) { return o->get_expected_min() > 0; })) {
+    ForEachValueOption(app, [](CLI::Option* o) {
         const CLI::Validator empty(
             [name = o->get_name()](const std::string& value) {
                 return value.empty() ? "empty value; give one, or leave " + name + " out"
@@ -42,9 +51,7 @@ void RefuseEmptyValues(CLI::App& app) {
             o->check(empty);  // after the names'
         else
             o->transform(empty);  // first
-    }
-    for (CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
-        RefuseEmptyValues(*sub);
+    });
 }
 
 /// Numbers on the command line are decimal, by the same rules as --set, --size and the
@@ -56,11 +63,10 @@ void RefuseEmptyValues(CLI::App& app) {
 /// option's own checks, which name them). Applied first, after the empty-value check,
 /// which passes "" on.
 void RequireDecimalNumbers(CLI::App& app) {
-    for (CLI::Option* o : app.get_options(
-             [](const CLI::Option* o) { return o->get_expected_min() > 0; })) {
+    ForEachValueOption(app, [](CLI::Option* o) {
         const std::string type = o->get_type_name();
         const bool integer = type.rfind("INT", 0) == 0;
-        if (!integer && type.rfind("FLOAT", 0) != 0) continue;
+        if (!integer && type.rfind("FLOAT", 0) != 0) return;
         o->transform(CLI::Validator(
             [integer](std::string& value) -> std::string {
                 if (value.empty()) return {};
@@ -77,9 +83,7 @@ void RequireDecimalNumbers(CLI::App& app) {
                 return {};
             },
             /*validator_desc=*/""));
-    }
-    for (CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; }))
-        RequireDecimalNumbers(*sub);
+    });
 }
 
 /// "--opt=" as "--opt ''" for an option that takes a value (CLI11 would take the next
