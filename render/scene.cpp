@@ -169,10 +169,13 @@ namespace {
 
 /// The settings that only some cameras or shadow kinds read (RefuseIgnoredSettings,
 /// SettingRead).
+/// The setting whose value decides whether a key is read.
+enum class Decider { Camera, Shadow };
+
 struct SettingRule {
     const char* key;
     bool (*read)(const RenderSettings&);
-    const char* setting;    ///< the setting that decides: "camera" or "shadow"
+    Decider decider;
     const char* appliesTo;  ///< its values that read the key
     const char* instead;    ///< what the other values read instead, or null
 };
@@ -186,14 +189,14 @@ bool Soft(const RenderSettings& s) { return s.shadow == ShadowKind::Soft; }
 bool ConeShadow(const RenderSettings& s) { return s.shadow == ShadowKind::Cone; }
 
 constexpr SettingRule kSettingRules[] = {
-    {"view_angle", Orbit, "camera", "orbit", "view_dir"},
-    {"azimuth", Orbit, "camera", "orbit", "view_dir"},
-    {"distance", Orbit, "camera", "orbit", "view_dir"},
-    {"fov", Orbit, "camera", "orbit", "view_dir"},
-    {"view_dir", Ortho, "camera", "ortho", nullptr},
-    {"shadow_steps", HardOrCone, "shadow", "hard or cone", nullptr},
-    {"shadow_softening", Soft, "shadow", "soft", nullptr},
-    {"shadow_penumbra", ConeShadow, "shadow", "cone", nullptr},
+    {"view_angle", Orbit, Decider::Camera, "orbit", "view_dir"},
+    {"azimuth", Orbit, Decider::Camera, "orbit", "view_dir"},
+    {"distance", Orbit, Decider::Camera, "orbit", "view_dir"},
+    {"fov", Orbit, Decider::Camera, "orbit", "view_dir"},
+    {"view_dir", Ortho, Decider::Camera, "ortho", nullptr},
+    {"shadow_steps", HardOrCone, Decider::Shadow, "hard or cone", nullptr},
+    {"shadow_softening", Soft, Decider::Shadow, "soft", nullptr},
+    {"shadow_penumbra", ConeShadow, Decider::Shadow, "cone", nullptr},
 };
 
 }  // namespace
@@ -223,11 +226,12 @@ void RefuseIgnoredSettings(const RenderSettings& s,
     }
     for (const SettingRule& r : kSettingRules) {
         if (!given(r.key) || r.read(s)) continue;
-        const std::string current = r.setting == std::string_view("camera")
-                                        ? std::string(kCameraNames.Name(s.camera))
-                                        : std::string(kShadowNames.Name(s.shadow));
-        throw Error(ParamName(r.key) + ": applies to " + ParamName(r.setting) + " " +
-                    r.appliesTo + ", not " + ParamName(r.setting) + " " + current +
+        const bool camera = r.decider == Decider::Camera;
+        const std::string setting = ParamName(camera ? "camera" : "shadow");
+        const std::string current(camera ? kCameraNames.Name(s.camera)
+                                         : kShadowNames.Name(s.shadow));
+        throw Error(ParamName(r.key) + ": applies to " + setting + " " + r.appliesTo +
+                    ", not " + setting + " " + current +
                     (r.instead ? std::string(", which reads ") + ParamName(r.instead)
                                : std::string()));
     }
