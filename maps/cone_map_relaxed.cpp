@@ -21,13 +21,33 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <numbers>
+#include <string_view>
 #include <vector>
 
 #include "core/error.h"
 #include "maps/cone_map.h"
 #include "maps/cone_map_detail.h"
+#include "maps/cone_search.h"
+
+#if RS_HAVE_CONE_SEARCH_AVX
+#include <immintrin.h>
+/// The AVX-512 parts of the search (where the lane search uses AVX-512, ConeSearchIsa):
+/// compiled for it whatever the build's target, called only where the CPU has it.
+#define RS_TARGET_AVX512 __attribute__((target("avx512f,avx512dq,avx512bw,avx512vl")))
+#endif
+
+namespace reliefsim::detail {
+namespace {
+#if RS_HAVE_CONE_SEARCH_AVX
+constexpr bool kAvx512Search = true;
+#else
+constexpr bool kAvx512Search = false;
+#endif
+}  // namespace
+}  // namespace reliefsim::detail
 
 namespace reliefsim::detail {
 
@@ -416,12 +436,86 @@ void ExitDistancesOfTexel(const DepthField& hf, const ExitWindow& win,
     }
 }
 
+#if RS_HAVE_CONE_SEARCH_AVX
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC bug 105593, see below
+#pragma GCC diagnostic ignored "-Wuninitialized"
+/// ExitDistancesOfTexel with AVX-512: the 16 sectors' distances in one vector; the same
+/// comparisons and minima, so the same distances.
+RS_TARGET_AVX512 void ExitDistancesOfTexelAvx512(const DepthField& hf,
+                                                 const ExitWindow& win,
+                                                 const std::vector<float>& max8,
+                                                 const std::vector<float>& max32, int i,
+                                                 int j, float d, float edge, float* out) {
+    const int W = hf.width, H = hf.height;
+    __m512 L = _mm512_set1_ps(edge);
+    float worst = edge;
+    const __m256 deep = _mm256_set1_ps(d);
+    // OpenSectors: the sectors of `mask` whose distance is above v.
+#define RS_OPEN(mask, v) \
+    _mm512_mask_cmp_ps_mask(__mmask16(mask), L, _mm512_set1_ps(v), _CMP_GT_OQ)
+    for (const ExitSuper& st : win.supers) {
+        if (st.minDist >= worst) break;
+        if (!RS_OPEN(st.mask, st.minDist)) continue;
+        if (!(max32[size_t(WrapFast(j + st.oy, H)) * size_t(W) +
+                    size_t(WrapFast(i + st.ox, W))] > d))
+            continue;
+        for (int x = st.first; x < st.last; ++x) {
+            const ExitTile& t = win.tiles[size_t(x)];
+            if (t.minDist >= worst) break;  // sorted by distance
+            const unsigned sectors = RS_OPEN(t.mask, t.minDist);
+            if (!sectors) continue;
+            const int wy = WrapFast(j + t.oy, H), wx = WrapFast(i + t.ox, W);
+            if (!(max8[size_t(wy) * size_t(W) + size_t(wx)] > d)) continue;
+            const uint64_t* slotsOf =
+                &win.sectorSlots[size_t(t.begin / (kTile * kTile)) * kSectors];
+            uint64_t wanted = 0;
+            for (unsigned m = sectors; m; m &= m - 1)
+                wanted |= slotsOf[std::countr_zero(m)];
+            uint64_t deeper = 0;
+            for (int a = 0; a < kTile; ++a) {
+                const unsigned rowWanted = unsigned(wanted >> (kTile * a)) & 0xFFu;
+                if (!rowWanted) continue;
+                const float* row = &hf.depth[size_t(WrapFast(wy + a, H)) * size_t(W)];
+                unsigned bits = 0;
+                if (wx + kTile <= W) {
+                    bits =
+                        _mm256_cmp_ps_mask(_mm256_loadu_ps(row + wx), deep, _CMP_GT_OQ);
+                } else {
+                    for (int b = 0; b < kTile; ++b)
+                        bits |= unsigned(row[WrapFast(wx + b, W)] > d) << b;
+                }
+                deeper |= uint64_t(bits & rowWanted) << (kTile * a);
+            }
+            bool changed = false;
+            for (; deeper; deeper &= deeper - 1) {
+                const ExitOffset& off =
+                    win.offs[size_t(t.begin + std::countr_zero(deeper))];
+                // LowerMasked: the sectors of the cell's mask whose distance is above
+                // its.
+                const __m512 v = _mm512_set1_ps(off.dist);
+                const __mmask16 lower =
+                    _mm512_mask_cmp_ps_mask(__mmask16(off.mask), v, L, _CMP_LT_OQ);
+                if (lower) {
+                    L = _mm512_mask_mov_ps(L, lower, v);
+                    changed = true;
+                }
+            }
+            if (changed) worst = _mm512_reduce_max_ps(L);
+        }
+    }
+    _mm512_storeu_ps(out, L);
+#undef RS_OPEN
+}
+#pragma GCC diagnostic pop
+#endif
+
 /// The exit field (ExitField) of a map for `steps` steps; empty (usable = false) when
 /// its float argument does not hold or it is not wanted. max8, max32: the map's depth
 /// maxima over 8x8 and 32x32 windows.
 ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted,
-                         const std::vector<float>& max8,
-                         const std::vector<float>& max32) {
+                         const std::vector<float>& max8, const std::vector<float>& max32,
+                         bool avx512) {
     ExitField f = MakeExitFieldSlack(hf, steps);
     f.usable = f.usable && wanted;
     if (!f.usable) return f;
@@ -451,7 +545,13 @@ ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted
                     const float d = b + ListingStep(1.0f - b, steps, inv);
                     if (!(d < dmax))
                         continue;  // nothing is deeper: no cell can end a march
-                    ExitDistancesOfTexel(hf, win, max8, max32, i, j, d, edge, L);
+#if RS_HAVE_CONE_SEARCH_AVX
+                    if (avx512)
+                        ExitDistancesOfTexelAvx512(hf, win, max8, max32, i, j, d, edge,
+                                                   L);
+                    else
+#endif
+                        ExitDistancesOfTexel(hf, win, max8, max32, i, j, d, edge, L);
                     uint8_t* out = &f.L[(size_t(j) * size_t(W) + size_t(i)) * kSectors];
                     for (int k = 0; k < kSectors; ++k)
                         out[k] = EncodeDown(f.decode, L[k]);
@@ -596,28 +696,62 @@ struct DenseOffsets {
     static constexpr int kPadLo = kApexSide - 1;
     static constexpr int kPadHi = kSuperTile * kTile + kApexSide;
     int hx = 0, hy = 0, pitch = 0;
-    std::vector<OffsetBounds>
-        at;  ///< one record per offset: a lane's test reads one line
+    /// One record per offset (a lane's test reads one line), or, for the AVX-512 search
+    /// (RelaxedTileSearch::SearchQuarterAvx512, which loads 4 adjacent offsets of a field
+    /// at a time), the same fields in arrays of their own: one of the two is filled.
+    std::vector<OffsetBounds> at;
+    struct Fields {
+        std::vector<float> distLo, dist, invD, stepK;
+        std::vector<uint32_t> mask;
+    } soa;
     size_t Index(int dx, int dy) const {
         return size_t(dy + hy + kPadLo) * size_t(pitch) + size_t(dx + hx + kPadLo);
     }
-    bool Valid(size_t o) const { return at[o].distLo < kInfF; }
+    OffsetBounds At(size_t o) const {
+        if (!at.empty()) return at[o];
+        return {soa.distLo[o], soa.dist[o], soa.invD[o], soa.stepK[o],
+                SectorBits(soa.mask[o])};
+    }
+    bool Valid(size_t o) const {
+        return (at.empty() ? soa.distLo[o] : at[o].distLo) < kInfF;
+    }
 };
 
-DenseOffsets MakeDenseOffsets(const Geometry& g, int W, int H, int steps) {
+/// The dense table of offsets, as records or (`fields`) as arrays of fields.
+DenseOffsets MakeDenseOffsets(const Geometry& g, int W, int H, int steps, bool fields) {
     DenseOffsets t;
     t.hx = g.halfX;
     t.hy = g.halfY;
     t.pitch = 2 * t.hx + 1 + DenseOffsets::kPadLo + DenseOffsets::kPadHi;
     const int rows = 2 * t.hy + 1 + DenseOffsets::kPadLo + DenseOffsets::kPadHi;
-    t.at.assign(size_t(t.pitch) * size_t(rows),
-                OffsetBounds{kInfF, kInfF, 0.0f, 0.0f, 0});
+    const size_t n = size_t(t.pitch) * size_t(rows);
+    const OffsetBounds none{kInfF, kInfF, 0.0f, 0.0f, 0};
+    if (fields) {
+        t.soa.distLo.assign(n, none.distLo);
+        t.soa.dist.assign(n, none.dist);
+        t.soa.invD.assign(n, none.invD);
+        t.soa.stepK.assign(n, none.stepK);
+        t.soa.mask.assign(n, none.mask);
+    } else {
+        t.at.assign(n, none);
+    }
     tbb::parallel_for(
         tbb::blocked_range<int>(-t.hy, t.hy + 1), [&](const tbb::blocked_range<int>& r) {
             for (int dy = r.begin(); dy < r.end(); ++dy)
-                for (int dx = -t.hx; dx <= t.hx; ++dx)
-                    if (dx != 0 || dy != 0)
-                        t.at[t.Index(dx, dy)] = MakeOffsetBounds(g, W, H, steps, dx, dy);
+                for (int dx = -t.hx; dx <= t.hx; ++dx) {
+                    if (dx == 0 && dy == 0) continue;
+                    const size_t o = t.Index(dx, dy);
+                    const OffsetBounds ob = MakeOffsetBounds(g, W, H, steps, dx, dy);
+                    if (fields) {
+                        t.soa.distLo[o] = ob.distLo;
+                        t.soa.dist[o] = ob.dist;
+                        t.soa.invD[o] = ob.invD;
+                        t.soa.stepK[o] = ob.stepK;
+                        t.soa.mask[o] = ob.mask;
+                    } else {
+                        t.at[o] = ob;
+                    }
+                }
         });
     return t;
 }
@@ -683,7 +817,7 @@ LaneWindows MakeLaneWindows(const DenseOffsets& d) {
                             for (int b = 0; b < 4; ++b) {
                                 const size_t o = d.Index(q.ex + b - lx, q.ey + a - ly);
                                 if (!d.Valid(o)) continue;
-                                const OffsetBounds& ob = d.at[o];
+                                const OffsetBounds ob = d.At(o);
                                 q.distLo[size_t(l)] =
                                     std::min(q.distLo[size_t(l)], ob.distLo);
                                 q.dLo[size_t(l)] = std::min(q.dLo[size_t(l)], ob.dist);
@@ -738,6 +872,65 @@ struct TileBest {
     std::array<RelaxedBest, kLanes> lane;
 };
 
+#if RS_HAVE_CONE_SEARCH_AVX
+// GCC 12's AVX-512 intrinsics start some results from _mm512_undefined_*(), which
+// -W(maybe-)uninitialized reports where they are inlined (GCC bug 105593, fixed in GCC
+// 13): off for this file's AVX-512 code (the helpers below and PairLanesAvx512).
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
+/// Lanes 0..7 and 8..15 of a float vector, as doubles; two 8-lane masks as one.
+RS_TARGET_AVX512 inline __m512d lo(__m512 v) {
+    return _mm512_maskz_cvtps_pd(0xFF, _mm512_castps512_ps256(v));
+}
+RS_TARGET_AVX512 inline __m512d hi(__m512 v) {
+    return _mm512_maskz_cvtps_pd(0xFF, _mm512_castps512_ps256(_mm512_shuffle_f32x4(
+                                           v, v, _MM_SHUFFLE(3, 2, 3, 2))));
+}
+/// Rows r = 0..3 of 4 adjacent values at p + r * pitch, as one vector (row-major).
+RS_TARGET_AVX512 inline __m512 Rows4(const float* p, size_t pitch) {
+    __m512 v = _mm512_castps128_ps512(_mm_loadu_ps(p));
+    v = _mm512_insertf32x4(v, _mm_loadu_ps(p + pitch), 1);
+    v = _mm512_insertf32x4(v, _mm_loadu_ps(p + 2 * pitch), 2);
+    return _mm512_insertf32x4(v, _mm_loadu_ps(p + 3 * pitch), 3);
+}
+RS_TARGET_AVX512 inline __m512i Rows4(const uint32_t* p, size_t pitch) {
+    const auto row = [&](size_t r) {
+        return _mm_loadu_si128(reinterpret_cast<const __m128i*>(p + r * pitch));
+    };
+    __m512i v = _mm512_castsi128_si512(row(0));
+    v = _mm512_inserti32x4(v, row(1), 1);
+    v = _mm512_inserti32x4(v, row(2), 2);
+    return _mm512_inserti32x4(v, row(3), 3);
+}
+inline __mmask16 join(__mmask8 l8, __mmask8 h8) {
+    return __mmask16(unsigned(l8) | (unsigned(h8) << 8));
+}
+/// ExitBoundPrunes for 8 lanes, in its double arithmetic operation by operation (no
+/// contraction: -ffp-contract=off), so the same lanes are pruned.
+RS_TARGET_AVX512 inline __mmask8 ExitBoundPrunes8(const ExitField& f, __m512d dLo,
+                                                  __m512d invD, __m512d b, __m512d L,
+                                                  __m512d apex, __m512d best,
+                                                  __m512d stepLo) {
+    const __m512d zero = _mm512_setzero_pd();
+    const __m512d a = _mm512_sub_pd(L, _mm512_set1_pd(2.0 * f.eps));
+    // std::max(a, stepLo): stepLo where a < stepLo.
+    const __m512d lam =
+        _mm512_mask_blend_pd(_mm512_cmp_pd_mask(a, stepLo, _CMP_LT_OQ), a, stepLo);
+    const __mmask8 moves = _mm512_cmp_pd_mask(lam, zero, _CMP_GT_OQ);
+    const __m512d den = _mm512_add_pd(
+        _mm512_sub_pd(_mm512_sub_pd(apex, b), _mm512_mul_pd(lam, _mm512_mul_pd(b, invD))),
+        _mm512_set1_pd(f.eta));
+    const __mmask8 below = _mm512_cmp_pd_mask(den, zero, _CMP_NGT_UQ);
+    const __mmask8 far = _mm512_cmp_pd_mask(
+        _mm512_mul_pd(_mm512_sub_pd(_mm512_add_pd(dLo, lam), _mm512_set1_pd(f.eps)),
+                      _mm512_set1_pd(1.0 - 0x1p-20)),
+        _mm512_mul_pd(best, den), _CMP_GE_OQ);
+    return __mmask8(moves & (below | far));
+}
+#pragma GCC diagnostic pop
+#endif
+
 struct RelaxedTileSearch {
     const DepthField& hf;
     const DenseOffsets& d;
@@ -753,15 +946,33 @@ struct RelaxedTileSearch {
     std::array<float, kLanes> apex{}, sx{}, sy{};
     std::array<double, kLanes> dApex{}, reach{};
     std::array<size_t, kLanes> laneDelta{};
+    bool avx512 = false;  ///< quarters by SearchQuarterAvx512 (DenseOffsets as fields)
+    /// The pairs SearchQuarterAvx512 has kept, marched 16 at a time (MarchBatchAvx512).
+    struct Marches {
+        int n = 0;
+        alignas(64) int32_t lane[kLanes], dx[kLanes], dy[kLanes];
+        alignas(64) float b[kLanes];
+        alignas(64) double clear[kLanes];
+        void Add(int l, int x, int y, float depth, double c) {
+            lane[n] = l;
+            dx[n] = x;
+            dy[n] = y;
+            b[n] = depth;
+            clear[n] = c;
+            ++n;
+        }
+    } marches;
+    alignas(64) std::array<float, kLanes> bestOf{};  ///< tb.lane[l].best, for the vectors
     TileBest tb;
 
     RelaxedTileSearch(const DepthField& hf, const DenseOffsets& d, const LaneWindows& lw,
                       const DepthWindows& dw, const ExitField& ef, int steps, float inv,
                       float dmin)
         : hf(hf), d(d), lw(lw), dw(dw), ef(ef), steps(steps), inv(inv), dmin(dmin) {
-        for (int l = 0; l < kLanes; ++l)
+        for (int l = 0; l < kLanes; ++l) {
             laneDelta[size_t(l)] =
                 size_t(l / kApexSide) * size_t(d.pitch) + size_t(l % kApexSide);
+        }
     }
 
     /// The listing's ratio of lane l's pair at offset (dx, dy); lowers its minimum.
@@ -773,6 +984,7 @@ struct RelaxedTileSearch {
                                      inv, apex[size_t(l)], rb.best, clear);
         if (rb.best > r) {
             rb.best = r;
+            bestOf[size_t(l)] = r;
             rb.argDx = dx;
             rb.argDy = dy;
             rb.found = true;
@@ -799,6 +1011,9 @@ struct RelaxedTileSearch {
     /// factor (1 - 2^-30) covers the double roundings of the step bound.
     LaneBits GroupLanes(const LaneGroup& q, LaneBits lanes, size_t w, float wmin,
                         float wmax, const std::vector<uint8_t>& lwin) const {
+#if RS_HAVE_CONE_SEARCH_AVX
+        if (avx512) return GroupLanesAvx512(q, lanes, w, wmin, wmax, lwin);
+#endif
         LaneBits keep = 0;
         const double dmin = double(wmin);
         double lam = 0, k = 0;
@@ -947,28 +1162,410 @@ struct RelaxedTileSearch {
                     const double best = double(tb.lane[u].best);
                     const OffsetBounds& ob = d.at[o];
                     if (double(ob.distLo) >= best * (dApex[u] - db)) continue;
-                    const int dxo = ex - l % kApexSide, dyo = ey - l / kApexSide;
-                    double clear = 0;
+                    double lp = 0, stepLo = 0;
                     if (ef.usable) {
-                        const double lp = double(MinOverSectors(ef, ef.L, dst, ob.mask));
-                        const double stepLo = double(ob.stepK) * shallow;
+                        lp = double(MinOverSectors(ef, ef.L, dst, ob.mask));
+                        stepLo = double(ob.stepK) * shallow;
                         if (ExitBoundPrunes(ef, double(ob.dist), double(ob.invD), db, lp,
                                             dApex[u], best, stepLo))
                             continue;
-                        if (TryAhead()) {
-                            const bool pruned = AheadPrunes(
-                                dxo, dyo, col, rowIndex, db, ob,
-                                std::max(lp - 2.0 * ef.eps, stepLo), dApex[u], best);
-                            ahead.Count(pruned);
-                            if (pruned) continue;
-                        }
-                        clear = lp * (1.0 - 0x1p-40);
                     }
-                    Consider(l, dxo, dyo, b, clear);
+                    MarchPair(l, ex, ey, col, rowIndex, b, ob, lp, stepLo);
                 }
             }
         }
     }
+
+    /// A pair of lane l (destination offset (ex, ey) from the tile's origin, at map
+    /// texel (col, row), depth b) that passed the distance and exit bounds (lp: its exit
+    /// field over the offset's sectors, stepLo: its one-step bound; both unused without
+    /// the exit field): the windows ahead, then the listing.
+    RS_INLINE void MarchPair(int l, int ex, int ey, int col, int row, float b,
+                             const OffsetBounds& ob, double lp, double stepLo,
+                             bool batch = false) {
+        const int dxo = ex - l % kApexSide, dyo = ey - l / kApexSide;
+        double clear = 0;
+        if (ef.usable) {
+            if (TryAhead()) {
+                const size_t u = size_t(l);
+                const bool pruned = AheadPrunes(dxo, dyo, col, row, double(b), ob,
+                                                std::max(lp - 2.0 * ef.eps, stepLo),
+                                                dApex[u], double(tb.lane[u].best));
+                ahead.Count(pruned);
+                if (pruned) return;
+            }
+            clear = lp * (1.0 - 0x1p-40);
+        }
+#if RS_HAVE_CONE_SEARCH_AVX
+        if (batch) {
+            marches.Add(l, dxo, dyo, b, clear);
+            if (marches.n == kLanes) MarchBatchAvx512();
+            return;
+        }
+#endif
+        static_cast<void>(batch);
+        Consider(l, dxo, dyo, b, clear);
+    }
+
+#if RS_HAVE_CONE_SEARCH_AVX
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
+#pragma GCC diagnostic ignored "-Wuninitialized"
+    /// GroupLanes with AVX-512, all lanes at once in its double arithmetic operation by
+    /// operation (the same lanes are kept).
+    RS_TARGET_AVX512 LaneBits GroupLanesAvx512(const LaneGroup& q, LaneBits lanes,
+                                               size_t w, float wmin, float wmax,
+                                               const std::vector<uint8_t>& lwin) const {
+        const bool exit = ef.usable;
+        double lam = 0, k = 0;
+        if (exit) {
+            if (!(wmax > 0.0f)) return 0;  // every destination gives NaN: ignored
+            lam = double(MinOverSectors(ef, lwin, w, q.mask));
+            const double bmax = double(wmax);
+            k = (1.0 - bmax) / (bmax * double(steps)) * (1.0 - 0x1p-20) * (1.0 - 0x1p-30);
+        }
+        __mmask16 keep =
+            _mm512_mask_cmp_ps_mask(__mmask16(lanes), _mm512_set1_ps(wmin),
+                                    _mm512_loadu_ps(apex.data()), _CMP_LT_OQ);
+        if (!keep) return 0;
+        const __m512 best = _mm512_load_ps(bestOf.data());
+        const __m512d bestL = lo(best), bestH = hi(best);
+        const __m512d apexL = _mm512_loadu_pd(dApex.data()),
+                      apexH = _mm512_loadu_pd(dApex.data() + 8);
+        const __m512d dmin = _mm512_set1_pd(double(wmin));
+        const __m512 distLo = _mm512_loadu_ps(q.distLo.data());
+        keep &= __mmask16(~join(
+            _mm512_cmp_pd_mask(
+                lo(distLo), _mm512_mul_pd(bestL, _mm512_sub_pd(apexL, dmin)), _CMP_GE_OQ),
+            _mm512_cmp_pd_mask(hi(distLo),
+                               _mm512_mul_pd(bestH, _mm512_sub_pd(apexH, dmin)),
+                               _CMP_GE_OQ)));
+        if (!keep || !exit) return keep;
+        const __m512 dLo = _mm512_loadu_ps(q.dLo.data()),
+                     invD = _mm512_loadu_ps(q.invD.data());
+        const __m512d L = _mm512_set1_pd(lam), kk = _mm512_set1_pd(k),
+                      slack = _mm512_set1_pd(0x1p-22);
+        const __m512d dLoL = lo(dLo), dLoH = hi(dLo);
+        keep &= __mmask16(
+            ~join(ExitBoundPrunes8(ef, dLoL, lo(invD), dmin, L, apexL, bestL,
+                                   _mm512_mul_pd(_mm512_sub_pd(dLoL, slack), kk)),
+                  ExitBoundPrunes8(ef, dLoH, hi(invD), dmin, L, apexH, bestH,
+                                   _mm512_mul_pd(_mm512_sub_pd(dLoH, slack), kk))));
+        return keep;
+    }
+
+    /// SearchQuarter with AVX-512 (DenseOffsets as arrays of fields): lane by lane, the
+    /// distance and exit bounds of the lane's 16 pairs into the quarter at once, one
+    /// vector lane per destination, in the scalar tests' double arithmetic operation by
+    /// operation (no contraction: -ffp-contract=off). The pairs kept go on to MarchPair,
+    /// destinations in order. A lane's pairs are tested against its minimum as it was
+    /// before the quarter, never below the scalar search's at the same pair: more pairs
+    /// may be kept, and the minimum is the same.
+    RS_TARGET_AVX512 void SearchQuarterAvx512(const LaneGroup& q, LaneBits lanes, int wx,
+                                              int wy) {
+        const int W = hf.width, H = hf.height;
+        int colOf[4], rowOf[4];
+        for (int k = 0; k < 4; ++k) {
+            colOf[k] = WrapFast(wx + k, W);
+            rowOf[k] = WrapFast(wy + k, H);
+        }
+        alignas(64) float depthOf[16], shallowOf[16];
+        size_t dstOf[16];
+        for (int i = 0; i < 16; ++i) {
+            dstOf[i] = size_t(rowOf[i >> 2]) * size_t(W) + size_t(colOf[i & 3]);
+            depthOf[i] = hf.depth[dstOf[i]];
+            shallowOf[i] = dw.shallow[dstOf[i]];
+        }
+        const __m512 b = _mm512_load_ps(depthOf);
+        // The listing gives NaN (ignored) for b <= 0, and 1 for b >= the apex.
+        const __mmask16 positive = _mm512_cmp_ps_mask(b, _mm512_setzero_ps(), _CMP_GT_OQ);
+        if (!positive) return;
+        // The exit field of the destinations in the quarter's sectors, decoded:
+        // exitOf[k][i] (the decoded codes keep their order, so their minimum is the
+        // decoded minimum code, as MinOverSectors takes it).
+        const unsigned sectors = ef.usable ? unsigned(q.mask) : 0u;
+        alignas(64) float exitOf[kSectors][16];
+        for (unsigned m = sectors; m; m &= m - 1) {
+            const int k = std::countr_zero(m);
+            for (int i = 0; i < 16; ++i)
+                exitOf[k][i] = ef.decode[ef.L[dstOf[i] * kSectors + size_t(k)]];
+        }
+        const __m512d bL = lo(b), bH = hi(b);
+        const __m512 shallow = _mm512_load_ps(shallowOf);
+        const __m512d shL = lo(shallow), shH = hi(shallow);
+        const size_t pitch = size_t(d.pitch);
+        const size_t base = d.Index(q.ex, q.ey);
+        for (LaneBits m = lanes; m; m &= m - 1) {
+            const int l = std::countr_zero(m);
+            const size_t u = size_t(l);
+            __mmask16 keep =
+                positive & _mm512_cmp_ps_mask(b, _mm512_set1_ps(apex[u]), _CMP_LT_OQ);
+            if (!keep) continue;
+            const size_t o0 = base - laneDelta[u];  // the lane's offset to destination 0
+            const __m512d best = _mm512_set1_pd(double(tb.lane[u].best));
+            const __m512d apexD = _mm512_set1_pd(dApex[u]);
+            // The distance bound: distLo >= best * (apex - b) prunes.
+            const __m512 distLo = Rows4(&d.soa.distLo[o0], pitch);
+            keep &= __mmask16(
+                ~join(_mm512_cmp_pd_mask(lo(distLo),
+                                         _mm512_mul_pd(best, _mm512_sub_pd(apexD, bL)),
+                                         _CMP_GE_OQ),
+                      _mm512_cmp_pd_mask(hi(distLo),
+                                         _mm512_mul_pd(best, _mm512_sub_pd(apexD, bH)),
+                                         _CMP_GE_OQ)));
+            if (!keep) continue;
+            alignas(64) float lpOf[16];
+            if (ef.usable) {
+                // MinOverSectors of each pair's offset mask, then ExitBoundPrunes.
+                const __m512i masks = Rows4(&d.soa.mask[o0], pitch);
+                __m512 lp = _mm512_set1_ps(kInfF);
+                for (unsigned sm = sectors; sm; sm &= sm - 1) {
+                    const int k = std::countr_zero(sm);
+                    const __mmask16 has = _mm512_mask_test_epi32_mask(
+                        keep, masks, _mm512_set1_epi32(1 << k));
+                    lp = _mm512_mask_min_ps(lp, has, lp, _mm512_load_ps(exitOf[k]));
+                }
+                _mm512_store_ps(lpOf, lp);
+                const __m512 stepK = Rows4(&d.soa.stepK[o0], pitch),
+                             invD = Rows4(&d.soa.invD[o0], pitch),
+                             dist = Rows4(&d.soa.dist[o0], pitch);
+                keep &= __mmask16(
+                    ~join(ExitBoundPrunes8(ef, lo(dist), lo(invD), bL, lo(lp), apexD,
+                                           best, _mm512_mul_pd(lo(stepK), shL)),
+                          ExitBoundPrunes8(ef, hi(dist), hi(invD), bH, hi(lp), apexD,
+                                           best, _mm512_mul_pd(hi(stepK), shH))));
+            }
+            for (unsigned k = keep; k; k &= k - 1) {
+                const int i = std::countr_zero(k);
+                const OffsetBounds ob = d.At(o0 + size_t(i >> 2) * pitch + size_t(i & 3));
+                MarchPair(l, q.ex + (i & 3), q.ey + (i >> 2), colOf[i & 3], rowOf[i >> 2],
+                          depthOf[i], ob, double(lpOf[i]),
+                          double(ob.stepK) * double(shallowOf[i]), true);
+            }
+        }
+        if (marches.n) MarchBatchAvx512();
+    }
+
+    /// Consider for the pairs of `marches` (up to 16), with AVX-512: ListingRatio's float
+    /// and double arithmetic lane by lane, operation by operation (the same ratios; a
+    /// point whose texel coordinate is outside [-n, 2n) is sampled by WrapFloorIndex
+    /// itself). Every pair is marched against its lane's minimum as it was before the
+    /// batch (at least the scalar search's then: an early out returns that minimum,
+    /// which lowers nothing), and the minima are lowered in the batch's order.
+    RS_TARGET_AVX512 void MarchBatchAvx512() {
+        const int n = marches.n;
+        marches.n = 0;
+        const int W = hf.width, H = hf.height;
+        const __mmask16 all = __mmask16((1u << n) - 1u);
+        const __m512i lane = _mm512_maskz_loadu_epi32(all, marches.lane);
+        const __m512 sxv = _mm512_permutexvar_ps(lane, _mm512_loadu_ps(sx.data())),
+                     syv = _mm512_permutexvar_ps(lane, _mm512_loadu_ps(sy.data())),
+                     src = _mm512_permutexvar_ps(lane, _mm512_loadu_ps(apex.data())),
+                     best = _mm512_permutexvar_ps(lane, _mm512_load_ps(bestOf.data()));
+        const __m512 dstx = _mm512_add_ps(
+            sxv,
+            _mm512_div_ps(_mm512_cvtepi32_ps(_mm512_maskz_loadu_epi32(all, marches.dx)),
+                          _mm512_set1_ps(float(W))));
+        const __m512 dsty = _mm512_add_ps(
+            syv,
+            _mm512_div_ps(_mm512_cvtepi32_ps(_mm512_maskz_loadu_epi32(all, marches.dy)),
+                          _mm512_set1_ps(float(H))));
+        const __m512 dstz = _mm512_maskz_loadu_ps(all, marches.b);
+        const __m512 one = _mm512_set1_ps(1.0f), inf = _mm512_set1_ps(kInfF);
+        __m512 r = one;  // the results
+        __mmask16 live = all;
+        // NaN in the listing (b <= 0); ratio 1 when the destination is not above the
+        // apex.
+        const __mmask16 nan =
+            _mm512_mask_cmp_ps_mask(live, dstz, _mm512_setzero_ps(), _CMP_NGT_UQ);
+        r = _mm512_mask_mov_ps(r, nan, inf);
+        live &= __mmask16(~nan);
+        live &= _mm512_cmp_ps_mask(dstz, src, _CMP_LT_OQ);
+        __m512 vx = _mm512_sub_ps(dstx, sxv), vy = _mm512_sub_ps(dsty, syv), vz = dstz;
+        const __mmask16 prune = _mm512_cmp_ps_mask(best, inf, _CMP_LT_OQ);
+        {
+            const __m512 lb =
+                _mm512_div_ps(_mm512_sqrt_ps(_mm512_add_ps(_mm512_mul_ps(vx, vx),
+                                                           _mm512_mul_ps(vy, vy))),
+                              _mm512_sub_ps(src, dstz));
+            const __mmask16 out =
+                _mm512_mask_cmp_ps_mask(__mmask16(live & prune), lb, best, _CMP_GE_OQ);
+            r = _mm512_mask_mov_ps(r, out, best);
+            live &= __mmask16(~out);
+        }
+        vx = _mm512_div_ps(vx, vz);
+        vy = _mm512_div_ps(vy, vz);
+        vz = _mm512_div_ps(vz, vz);
+        const __m512 scale = _mm512_sub_ps(one, dstz);
+        vx = _mm512_mul_ps(vx, scale);
+        vy = _mm512_mul_ps(vy, scale);
+        vz = _mm512_mul_ps(vz, scale);
+        const auto stepOf = [&](__m512 v) RS_TARGET_AVX512 {
+            return inv > 0.0f ? _mm512_mul_ps(v, _mm512_set1_ps(inv))
+                              : _mm512_div_ps(v, _mm512_set1_ps(float(steps)));
+        };
+        const __m512 stx = stepOf(vx), sty = stepOf(vy), stz = stepOf(vz);
+        __m512 px = _mm512_add_ps(dstx, stx), py = _mm512_add_ps(dsty, sty),
+               pz = _mm512_add_ps(dstz, stz);
+        live &= __mmask16(~_mm512_cmp_ps_mask(pz, src, _CMP_GE_OQ));  // r = 1
+        __m512i i = _mm512_set1_epi32(1);
+        // The samples proven inside the solid by the exit field (`clear`): only their
+        // sums.
+        {
+            __m512i k0 = _mm512_setzero_si512();
+            __mmask16 skip = 0;
+            for (int h = 0; h < 2; ++h) {
+                const __mmask8 hl = __mmask8((live & prune) >> (8 * h));
+                const __m512d clear = _mm512_loadu_pd(marches.clear + 8 * h);
+                const __m512d sxd = h ? hi(stx) : lo(stx), syd = h ? hi(sty) : lo(sty);
+                const __m512d step2 =
+                    _mm512_add_pd(_mm512_mul_pd(sxd, sxd), _mm512_mul_pd(syd, syd));
+                const __mmask8 m = __mmask8(
+                    _mm512_mask_cmp_pd_mask(hl, clear, _mm512_setzero_pd(), _CMP_GT_OQ) &
+                    _mm512_cmp_pd_mask(step2, _mm512_setzero_pd(), _CMP_GT_OQ));
+                if (!m) continue;
+                const __m512d k = _mm512_roundscale_pd(
+                    _mm512_div_pd(clear, _mm512_sqrt_pd(step2)), _MM_FROUND_TO_NEG_INF);
+                // k < steps ? int(k) : steps - 1
+                const __mmask8 small =
+                    _mm512_cmp_pd_mask(k, _mm512_set1_pd(double(steps)), _CMP_LT_OQ);
+                __m256i kk =
+                    _mm256_mask_blend_epi32(small, _mm256_set1_epi32(steps - 1),
+                                            _mm512_cvttpd_epi32(_mm512_mask_blend_pd(
+                                                small, _mm512_setzero_pd(), k)));
+                const __m512d clear2 = _mm512_mul_pd(clear, clear);
+                for (;;) {
+                    const __m512d kd = _mm512_cvtepi32_pd(kk);
+                    const __mmask8 dec = __mmask8(
+                        m &
+                        _mm256_cmp_epi32_mask(kk, _mm256_setzero_si256(), _MM_CMPINT_GT) &
+                        _mm512_cmp_pd_mask(_mm512_mul_pd(_mm512_mul_pd(kd, kd), step2),
+                                           clear2, _CMP_GE_OQ));
+                    if (!dec) break;
+                    kk = _mm256_mask_sub_epi32(kk, dec, kk, _mm256_set1_epi32(1));
+                }
+                kk = _mm256_maskz_mov_epi32(m, kk);
+                k0 = h ? _mm512_inserti64x4(k0, kk, 1) : _mm512_inserti64x4(k0, kk, 0);
+                skip |= __mmask16(unsigned(m) << (8 * h));
+            }
+            if (skip) {
+                for (int it = 1;; ++it) {
+                    const __mmask16 add = _mm512_mask_cmp_epi32_mask(
+                        skip, _mm512_set1_epi32(it), k0, _MM_CMPINT_LE);
+                    if (!add) break;
+                    px = _mm512_mask_add_ps(px, add, px, stx);
+                    py = _mm512_mask_add_ps(py, add, py, sty);
+                    pz = _mm512_mask_add_ps(pz, add, pz, stz);
+                }
+                i = _mm512_mask_add_epi32(i, skip, k0, _mm512_set1_epi32(1));
+                live &= __mmask16(~_mm512_mask_cmp_ps_mask(skip, pz, src, _CMP_GE_OQ));
+            }
+        }
+        const __m512d best2L = _mm512_mul_pd(_mm512_mul_pd(lo(best), lo(best)),
+                                             _mm512_set1_pd(1.0 + 0x1p-20)),
+                      best2H = _mm512_mul_pd(_mm512_mul_pd(hi(best), hi(best)),
+                                             _mm512_set1_pd(1.0 + 0x1p-20));
+        const __m512i stepsV = _mm512_set1_epi32(steps);
+        const __m512 fw = _mm512_set1_ps(float(W)), fh = _mm512_set1_ps(float(H));
+        const __m512i wv = _mm512_set1_epi32(W), hv = _mm512_set1_epi32(H);
+        __mmask16 exit = 0;  // lanes whose march stopped: ratio at the exit point
+        // Lanes that ran out of steps also take the ratio at their last point.
+        exit |= _mm512_mask_cmp_epi32_mask(live, i, stepsV, _MM_CMPINT_GE);
+        live &= __mmask16(~exit);
+        while (live) {
+            // NearestWrap: the texel index of u * n, floor, wrapped into [0, n).
+            const auto index = [&](__m512 p, __m512 fn, __m512i nv, int nn,
+                                   __mmask16& odd) RS_TARGET_AVX512 {
+                const __m512 f =
+                    _mm512_roundscale_ps(_mm512_mul_ps(p, fn), _MM_FROUND_TO_NEG_INF);
+                const __m512i k = _mm512_cvttps_epi32(f);
+                // [-n, 2n) in floats first: the conversion is exact there.
+                odd |= _mm512_mask_cmp_ps_mask(live, f, _mm512_set1_ps(-float(nn)),
+                                               _CMP_NGE_UQ) |
+                       _mm512_mask_cmp_ps_mask(live, f, _mm512_set1_ps(2.0f * float(nn)),
+                                               _CMP_NLT_UQ);
+                __m512i w = _mm512_mask_add_epi32(
+                    k, _mm512_cmp_epi32_mask(k, _mm512_setzero_si512(), _MM_CMPINT_LT), k,
+                    nv);
+                w = _mm512_mask_sub_epi32(w, _mm512_cmp_epi32_mask(w, nv, _MM_CMPINT_NLT),
+                                          w, nv);
+                return w;
+            };
+            __mmask16 odd = 0;
+            __m512i ix = index(px, fw, wv, W, odd), iy = index(py, fh, hv, H, odd);
+            if (odd) {
+                alignas(64) int32_t xs[16], ys[16];
+                alignas(64) float us[16], vs[16];
+                _mm512_store_si512(xs, ix);
+                _mm512_store_si512(ys, iy);
+                _mm512_store_ps(us, px);
+                _mm512_store_ps(vs, py);
+                for (unsigned m = odd; m; m &= m - 1) {
+                    const int l = std::countr_zero(m);
+                    xs[l] = WrapFloorIndex(us[l] * float(W), W);
+                    ys[l] = WrapFloorIndex(vs[l] * float(H), H);
+                }
+                ix = _mm512_load_si512(xs);
+                iy = _mm512_load_si512(ys);
+            }
+            const __m512 depth = _mm512_mask_i32gather_ps(
+                _mm512_setzero_ps(), live,
+                _mm512_add_epi32(_mm512_mullo_epi32(iy, wv), ix), hf.depth.data(), 4);
+            const __mmask16 adv = _mm512_mask_cmp_ps_mask(live, depth, pz, _CMP_LE_OQ);
+            exit |= __mmask16(live & ~adv);  // sampled above the ray: the listing stops
+            live = adv;
+            if (!live) break;
+            px = _mm512_mask_add_ps(px, live, px, stx);
+            py = _mm512_mask_add_ps(py, live, py, sty);
+            pz = _mm512_mask_add_ps(pz, live, pz, stz);
+            const __mmask16 above = _mm512_mask_cmp_ps_mask(live, pz, src, _CMP_GE_OQ);
+            r = _mm512_mask_mov_ps(r, above, one);
+            live &= __mmask16(~above);
+            // The early out at the current point, in double (ListingRatio).
+            const __m512 cxf = _mm512_sub_ps(px, sxv), cyf = _mm512_sub_ps(py, syv),
+                         denf = _mm512_sub_ps(src, pz);
+            __mmask8 outs[2];
+            for (int h = 0; h < 2; ++h) {
+                const __m512d cx = h ? hi(cxf) : lo(cxf), cy = h ? hi(cyf) : lo(cyf),
+                              den = h ? hi(denf) : lo(denf);
+                outs[h] = _mm512_mask_cmp_pd_mask(
+                    __mmask8((live & prune) >> (8 * h)),
+                    _mm512_add_pd(_mm512_mul_pd(cx, cx), _mm512_mul_pd(cy, cy)),
+                    _mm512_mul_pd(_mm512_mul_pd(h ? best2H : best2L, den), den),
+                    _CMP_GE_OQ);
+            }
+            const __mmask16 out = join(outs[0], outs[1]);
+            r = _mm512_mask_mov_ps(r, out, best);
+            live &= __mmask16(~out);
+            i = _mm512_mask_add_epi32(i, live, i, _mm512_set1_epi32(1));
+            const __mmask16 spent =
+                _mm512_mask_cmp_epi32_mask(live, i, stepsV, _MM_CMPINT_GE);
+            exit |= spent;
+            live &= __mmask16(~spent);
+        }
+        {
+            const __m512 ex = _mm512_sub_ps(px, sxv), ey = _mm512_sub_ps(py, syv);
+            r = _mm512_mask_div_ps(r, exit,
+                                   _mm512_sqrt_ps(_mm512_add_ps(_mm512_mul_ps(ex, ex),
+                                                                _mm512_mul_ps(ey, ey))),
+                                   _mm512_sub_ps(src, pz));
+        }
+        alignas(64) float rs[16];
+        _mm512_store_ps(rs, r);
+        for (int k = 0; k < n; ++k) {
+            const int l = marches.lane[k];
+            RelaxedBest& rb = tb.lane[size_t(l)];
+            if (rb.best > rs[k]) {
+                rb.best = rs[k];
+                bestOf[size_t(l)] = rs[k];
+                rb.argDx = marches.dx[k];
+                rb.argDy = marches.dy[k];
+                rb.found = true;
+            }
+        }
+    }
+#pragma GCC diagnostic pop
+#endif
 
     /// The minima of the tile at (ti, tj) (texels ti..ti+3, tj..tj+3 inside the map) for
     /// apexes apexOf(lane), seeded with the minimisers of the tile to its left (`prev`,
@@ -980,6 +1577,7 @@ struct RelaxedTileSearch {
         J = tj;
         active = 0;
         tb = TileBest{};
+        for (int l = 0; l < kLanes; ++l) bestOf[size_t(l)] = tb.lane[size_t(l)].best;
         for (int l = 0; l < kLanes; ++l) {
             const size_t u = size_t(l);
             const int i = I + l % kApexSide, j = J + l / kApexSide;
@@ -1031,7 +1629,14 @@ struct RelaxedTileSearch {
                     int qx = 0, qy = 0;
                     const LaneBits lq =
                         WindowLanes(qg, lt, dw.min4, dw.max[1], ef.Lwin4, qx, qy);
-                    if (lq) SearchQuarter(qg, lq, qx, qy);
+                    if (!lq) continue;
+#if RS_HAVE_CONE_SEARCH_AVX
+                    if (avx512) {
+                        SearchQuarterAvx512(qg, lq, qx, qy);
+                        continue;
+                    }
+#endif
+                    SearchQuarter(qg, lq, qx, qy);
                 }
             }
         }
@@ -1055,8 +1660,11 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
     // The exit field before the offsets and the other windows: its build's scratch is
     // freed before they are made (peak memory at 2048²).
     const float inv = PowerOfTwoInverse(p.searchSteps);
+    // The exit field's build and the search's bounds with AVX-512 where the lane search
+    // uses it (RS_CONE_SEARCH_ISA forces a unit; the tests compare them).
+    const bool avx512 = kAvx512Search && std::string_view(ConeSearchIsa()) == "avx512";
     const ExitField ef =
-        BuildExitField(hf, p.searchSteps, inv, exitField, dw.max[2], dw.max[4]);
+        BuildExitField(hf, p.searchSteps, inv, exitField, dw.max[2], dw.max[4], avx512);
     {
         SearchWindows sw;  // depth minima over 8x8 and 32x32 windows (the tiled search's)
         MakeSearchWindows(hf, sw);
@@ -1073,7 +1681,7 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
         const double b = double(hf.depth[t]);
         if (b > 0) dw.shallow[t] = NonNegFloatAtMost((1.0 - b) / b);
     }
-    const DenseOffsets dense = MakeDenseOffsets(g, W, H, p.searchSteps);
+    const DenseOffsets dense = MakeDenseOffsets(g, W, H, p.searchSteps, avx512);
     const LaneWindows lw = MakeLaneWindows(dense);
     ProgressCounter progress(p.progress, H);
     const int tileRows = (H + kApexSide - 1) / kApexSide;
@@ -1082,6 +1690,7 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
         [&](const tbb::blocked_range<int>& rows) {
             RelaxedTileSearch search(hf, dense, lw, dw, ef, p.searchSteps, inv, dmin);
             search.aheadEveryPair = aheadEveryPair;
+            search.avx512 = avx512;
             for (int ty = rows.begin(); ty < rows.end(); ++ty) {
                 const int J = ty * kApexSide;
                 for (int c = 0; c < K; ++c) {

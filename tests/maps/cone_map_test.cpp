@@ -485,6 +485,77 @@ TEST(ConeMap, RelaxedSearchWithoutExitFieldMatchesBruteForce) {
     }
 }
 
+TEST(ConeMap, RelaxedSearchIsTheSameOnEveryInstructionSet) {
+    // The pruned relaxed search runs its bounds, its exit field's build and its marches
+    // with AVX-512 where the lane search does (RS_CONE_SEARCH_ISA), else scalar: both
+    // equal the listing evaluated for every pair, on every path: power-of-two steps
+    // (products) and others (divisions), one step, 4096 steps, zero depths (NaN), a
+    // plateau (the exit field's window edge), without the exit field, stacked channels,
+    // and destinations so shallow that the march's first step lands far outside the map
+    // (texel coordinates outside [-n, 2n) and beyond 2^30, sampled by the scalar wrap).
+    const char* old = std::getenv("RS_CONE_SEARCH_ISA");
+    const std::string saved = old ? old : "";
+    DepthField zeros = RandomField(28, 28, 21, false);
+    for (size_t t = 0; t < zeros.depth.size(); t += 7) zeros.depth[t] = 0.0f;
+    DepthField shallow = RandomField(32, 32, 8, false);
+    for (size_t t = 0; t < shallow.depth.size(); t += 5)
+        shallow.depth[t] = t % 2 ? 1e-6f : 1e-30f;
+    shallow.name = "shallow";
+    // Depths k/8 with 8 steps: the march's z (b + i (1 - b) / 8) is exact and often equal
+    // to a sampled depth, where the listing goes on (depth <= z).
+    DepthField dyadic = RandomField(32, 32, 4, false);
+    for (float& d : dyadic.depth) d = d < 0.4f ? 0.5f : d < 0.8f ? 0.625f : 1.0f;
+    dyadic.name = "dyadic";
+    struct Case {
+        DepthField hf;
+        int steps;
+        ConeKind kind;
+        bool exitField;
+    };
+    const std::vector<Case> cases = {
+        {QuantizeToUnorm8(MakeBuiltinMap("shapes", 48, 48)), 128, ConeKind::Relaxed,
+         true},
+        {RandomField(40, 36, 6, true), 128, ConeKind::Relaxed, true},
+        {MakeBuiltinMap("noise", 40, 40), 37, ConeKind::Relaxed, true},
+        {QuantizeToUnorm8(MakeBuiltinMap("bumps", 24, 24)), 1, ConeKind::Relaxed, true},
+        {QuantizeToUnorm8(MakeBuiltinMap("shapes", 16, 16)), 4096, ConeKind::Relaxed,
+         true},
+        {zeros, 128, ConeKind::Relaxed, true},
+        {PlateauField(48), 128, ConeKind::Relaxed, true},
+        {shallow, 128, ConeKind::Relaxed, true},
+        {dyadic, 8, ConeKind::Relaxed, true},
+        {RandomField(32, 24, 17, true), 64, ConeKind::Relaxed, false},
+        {QuantizeToUnorm8(MakeBuiltinMap("shapes", 32, 32)), 128, ConeKind::Stacked,
+         true},
+    };
+    size_t compared = 0;
+    for (const Case& c : cases) {
+        ConeMapParams p;
+        p.searchSteps = c.steps;
+        if (c.kind == ConeKind::Stacked) {
+            p.relaxed = true;
+            p.stackedCount = 3;
+        }
+        const std::string what = c.hf.name + " steps " + std::to_string(c.steps);
+        const ConeMap brute = GenerateConeMapBruteForce(c.hf, c.kind, p);
+        for (const char* isa : {"sse4.1", "avx512"}) {
+            setenv("RS_CONE_SEARCH_ISA", isa, 1);
+            if (std::string(detail::ConeSearchIsa()) != isa) continue;  // CPU lacks it
+            ++compared;
+            const ConeMap fast =
+                c.kind == ConeKind::Relaxed
+                    ? detail::RelaxedListingMap(c.hf, p, false, c.kind, c.exitField)
+                    : GenerateConeMap(c.hf, c.kind, p);
+            ExpectBitEqual(fast, brute, what + " " + isa);
+        }
+    }
+    EXPECT_GE(compared, cases.size());  // sse4.1 runs everywhere
+    if (old)
+        setenv("RS_CONE_SEARCH_ISA", saved.c_str(), 1);
+    else
+        unsetenv("RS_CONE_SEARCH_ISA");
+}
+
 TEST(ConeMap, StackedRelaxedChannelsWidenUpwards) {
     // Channel 0 (apex on the surface) is the relaxed map itself; a higher apex (channel
     // k) sees fewer destinations above it and a shorter height to every exit point, so
