@@ -931,6 +931,257 @@ RS_TARGET_AVX512 inline __mmask8 ExitBoundPrunes8(const ExitField& f, __m512d dL
 #pragma GCC diagnostic pop
 #endif
 
+/// Pairs waiting for their marches (RelaxedTileSearch::MarchBatchAvx512): the lane, the
+/// offset, the destination's position as Consider computes it, its depth, and the
+/// exit-field distance the march may skip (ListingRatio's `clear`).
+struct MarchQueue {
+    static constexpr int kSize = 2 * kLanes;
+    int n = 0;
+    alignas(64) int32_t lane[kSize], dx[kSize], dy[kSize];
+    alignas(64) float dstx[kSize], dsty[kSize], b[kSize];
+    alignas(64) double clear[kSize];
+    void Add(int l, int x, int y, float px, float py, float depth, double c) {
+        lane[n] = l;
+        dx[n] = x;
+        dy[n] = y;
+        dstx[n] = px;
+        dsty[n] = py;
+        b[n] = depth;
+        clear[n] = c;
+        ++n;
+    }
+};
+
+#if RS_HAVE_CONE_SEARCH_AVX
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC bug 105593, see above
+#pragma GCC diagnostic ignored "-Wuninitialized"
+/// ListingRatio for up to 16 pairs at once, one vector lane each: its float and double
+/// arithmetic lane by lane, operation by operation (no contraction: -ffp-contract=off),
+/// so the same ratios. A sampled point whose texel coordinate is outside [-n, 2n) takes
+/// WrapFloorIndex itself. Start sets the pairs up to the march's loop, Step takes one
+/// sample of every live lane, Ratios gives the results once none is live.
+struct MarchLanes {
+    __mmask16 live = 0;
+    __mmask16 prune = 0;  // lanes with a finite minimum (the early outs)
+    __mmask16 exit = 0;   // lanes whose march ended: the ratio at the point reached
+    int steps = 0;
+    __m512 sx, sy, src, best, r, px, py, pz, stx, sty, stz;
+    __m512d best2L, best2H;
+    __m512i i;
+
+    /// The pairs [first, first + n) of q; sxOf, syOf, apexOf, bestOf: per search lane.
+    RS_TARGET_AVX512 RS_INLINE void Start(const DepthField& hf, int nSteps, float inv,
+                                          const MarchQueue& q, int first, int n,
+                                          const std::array<float, kLanes>& sxOf,
+                                          const std::array<float, kLanes>& syOf,
+                                          const std::array<float, kLanes>& apexOf,
+                                          const std::array<float, kLanes>& bestOf) {
+        static_cast<void>(hf);
+        steps = nSteps;
+        const __mmask16 all = __mmask16((1u << n) - 1u);
+        live = all;
+        exit = 0;
+        const __m512 one = _mm512_set1_ps(1.0f), inf = _mm512_set1_ps(kInfF);
+        r = one;
+        if (!n) return;
+        const __m512i lane = _mm512_maskz_loadu_epi32(all, q.lane + first);
+        sx = _mm512_permutexvar_ps(lane, _mm512_loadu_ps(sxOf.data()));
+        sy = _mm512_permutexvar_ps(lane, _mm512_loadu_ps(syOf.data()));
+        src = _mm512_permutexvar_ps(lane, _mm512_loadu_ps(apexOf.data()));
+        best = _mm512_permutexvar_ps(lane, _mm512_loadu_ps(bestOf.data()));
+        const __m512 dstx = _mm512_maskz_loadu_ps(all, q.dstx + first),
+                     dsty = _mm512_maskz_loadu_ps(all, q.dsty + first),
+                     dstz = _mm512_maskz_loadu_ps(all, q.b + first);
+        // NaN in the listing (b <= 0); ratio 1 when the destination is not above the
+        // apex.
+        const __mmask16 nan =
+            _mm512_mask_cmp_ps_mask(live, dstz, _mm512_setzero_ps(), _CMP_NGT_UQ);
+        r = _mm512_mask_mov_ps(r, nan, inf);
+        live &= __mmask16(~nan);
+        live &= _mm512_cmp_ps_mask(dstz, src, _CMP_LT_OQ);
+        __m512 vx = _mm512_sub_ps(dstx, sx), vy = _mm512_sub_ps(dsty, sy), vz = dstz;
+        prune = _mm512_cmp_ps_mask(best, inf, _CMP_LT_OQ);
+        {
+            const __m512 lb =
+                _mm512_div_ps(_mm512_sqrt_ps(_mm512_add_ps(_mm512_mul_ps(vx, vx),
+                                                           _mm512_mul_ps(vy, vy))),
+                              _mm512_sub_ps(src, dstz));
+            const __mmask16 out =
+                _mm512_mask_cmp_ps_mask(__mmask16(live & prune), lb, best, _CMP_GE_OQ);
+            r = _mm512_mask_mov_ps(r, out, best);
+            live &= __mmask16(~out);
+        }
+        vx = _mm512_div_ps(vx, vz);
+        vy = _mm512_div_ps(vy, vz);
+        vz = _mm512_div_ps(vz, vz);
+        const __m512 scale = _mm512_sub_ps(one, dstz);
+        vx = _mm512_mul_ps(vx, scale);
+        vy = _mm512_mul_ps(vy, scale);
+        vz = _mm512_mul_ps(vz, scale);
+        if (inv > 0.0f) {
+            const __m512 k = _mm512_set1_ps(inv);
+            stx = _mm512_mul_ps(vx, k);
+            sty = _mm512_mul_ps(vy, k);
+            stz = _mm512_mul_ps(vz, k);
+        } else {
+            const __m512 k = _mm512_set1_ps(float(steps));
+            stx = _mm512_div_ps(vx, k);
+            sty = _mm512_div_ps(vy, k);
+            stz = _mm512_div_ps(vz, k);
+        }
+        px = _mm512_add_ps(dstx, stx);
+        py = _mm512_add_ps(dsty, sty);
+        pz = _mm512_add_ps(dstz, stz);
+        live &= __mmask16(~_mm512_cmp_ps_mask(pz, src, _CMP_GE_OQ));  // r = 1
+        i = _mm512_set1_epi32(1);
+        // The samples proven inside the solid by the exit field (`clear`): only their
+        // sums.
+        __m512i k0 = _mm512_setzero_si512();
+        __mmask16 skip = 0;
+        for (int h = 0; h < 2; ++h) {
+            const __mmask8 hl = __mmask8((live & prune) >> (8 * h));
+            const __m512d clear = _mm512_loadu_pd(q.clear + first + 8 * h);
+            const __m512d sxd = h ? hi(stx) : lo(stx), syd = h ? hi(sty) : lo(sty);
+            const __m512d step2 =
+                _mm512_add_pd(_mm512_mul_pd(sxd, sxd), _mm512_mul_pd(syd, syd));
+            const __mmask8 m = __mmask8(
+                _mm512_mask_cmp_pd_mask(hl, clear, _mm512_setzero_pd(), _CMP_GT_OQ) &
+                _mm512_cmp_pd_mask(step2, _mm512_setzero_pd(), _CMP_GT_OQ));
+            if (!m) continue;
+            const __m512d k = _mm512_roundscale_pd(
+                _mm512_div_pd(clear, _mm512_sqrt_pd(step2)), _MM_FROUND_TO_NEG_INF);
+            // k < steps ? int(k) : steps - 1
+            const __mmask8 small =
+                _mm512_cmp_pd_mask(k, _mm512_set1_pd(double(steps)), _CMP_LT_OQ);
+            __m256i kk = _mm256_mask_blend_epi32(
+                small, _mm256_set1_epi32(steps - 1),
+                _mm512_cvttpd_epi32(_mm512_mask_blend_pd(small, _mm512_setzero_pd(), k)));
+            const __m512d clear2 = _mm512_mul_pd(clear, clear);
+            for (;;) {
+                const __m512d kd = _mm512_cvtepi32_pd(kk);
+                const __mmask8 dec = __mmask8(
+                    m & _mm256_cmp_epi32_mask(kk, _mm256_setzero_si256(), _MM_CMPINT_GT) &
+                    _mm512_cmp_pd_mask(_mm512_mul_pd(_mm512_mul_pd(kd, kd), step2),
+                                       clear2, _CMP_GE_OQ));
+                if (!dec) break;
+                kk = _mm256_mask_sub_epi32(kk, dec, kk, _mm256_set1_epi32(1));
+            }
+            kk = _mm256_maskz_mov_epi32(m, kk);
+            k0 = h ? _mm512_inserti64x4(k0, kk, 1) : _mm512_inserti64x4(k0, kk, 0);
+            skip |= __mmask16(unsigned(m) << (8 * h));
+        }
+        if (skip) {
+            for (int it = 1;; ++it) {
+                const __mmask16 add = _mm512_mask_cmp_epi32_mask(
+                    skip, _mm512_set1_epi32(it), k0, _MM_CMPINT_LE);
+                if (!add) break;
+                px = _mm512_mask_add_ps(px, add, px, stx);
+                py = _mm512_mask_add_ps(py, add, py, sty);
+                pz = _mm512_mask_add_ps(pz, add, pz, stz);
+            }
+            i = _mm512_mask_add_epi32(i, skip, k0, _mm512_set1_epi32(1));
+            live &= __mmask16(~_mm512_mask_cmp_ps_mask(skip, pz, src, _CMP_GE_OQ));
+        }
+        const __m512d c = _mm512_set1_pd(1.0 + 0x1p-20);
+        best2L = _mm512_mul_pd(_mm512_mul_pd(lo(best), lo(best)), c);
+        best2H = _mm512_mul_pd(_mm512_mul_pd(hi(best), hi(best)), c);
+        // Lanes out of steps take the ratio at their last point.
+        const __mmask16 spent =
+            _mm512_mask_cmp_epi32_mask(live, i, _mm512_set1_epi32(steps), _MM_CMPINT_GE);
+        exit |= spent;
+        live &= __mmask16(~spent);
+    }
+
+    /// NearestWrap's wrapped texel index of the coordinates p * n of the live lanes;
+    /// `odd`: the lanes outside [-n, 2n), left to the caller.
+    RS_TARGET_AVX512 RS_INLINE __m512i Index(__m512 p, int n, __mmask16& odd) const {
+        const __m512 f = _mm512_roundscale_ps(_mm512_mul_ps(p, _mm512_set1_ps(float(n))),
+                                              _MM_FROUND_TO_NEG_INF);
+        const __m512i k = _mm512_cvttps_epi32(f);
+        const __m512i nv = _mm512_set1_epi32(n);
+        // [-n, 2n) in floats first: the conversion is exact there.
+        odd |= __mmask16(
+            _mm512_mask_cmp_ps_mask(live, f, _mm512_set1_ps(-float(n)), _CMP_NGE_UQ) |
+            _mm512_mask_cmp_ps_mask(live, f, _mm512_set1_ps(2.0f * float(n)),
+                                    _CMP_NLT_UQ));
+        __m512i w = _mm512_mask_add_epi32(
+            k, _mm512_cmp_epi32_mask(k, _mm512_setzero_si512(), _MM_CMPINT_LT), k, nv);
+        w = _mm512_mask_sub_epi32(w, _mm512_cmp_epi32_mask(w, nv, _MM_CMPINT_NLT), w, nv);
+        return w;
+    }
+
+    /// One sample of every live lane (the listing's loop body).
+    RS_TARGET_AVX512 RS_INLINE void Step(const DepthField& hf) {
+        const int W = hf.width, H = hf.height;
+        __mmask16 odd = 0;
+        __m512i ix = Index(px, W, odd), iy = Index(py, H, odd);
+        if (odd) {
+            alignas(64) int32_t xs[kLanes], ys[kLanes];
+            alignas(64) float us[kLanes], vs[kLanes];
+            _mm512_store_si512(xs, ix);
+            _mm512_store_si512(ys, iy);
+            _mm512_store_ps(us, px);
+            _mm512_store_ps(vs, py);
+            for (unsigned m = odd; m; m &= m - 1) {
+                const int l = std::countr_zero(m);
+                xs[l] = WrapFloorIndex(us[l] * float(W), W);
+                ys[l] = WrapFloorIndex(vs[l] * float(H), H);
+            }
+            ix = _mm512_load_si512(xs);
+            iy = _mm512_load_si512(ys);
+        }
+        const __m512 depth = _mm512_mask_i32gather_ps(
+            _mm512_setzero_ps(), live,
+            _mm512_add_epi32(_mm512_mullo_epi32(iy, _mm512_set1_epi32(W)), ix),
+            hf.depth.data(), 4);
+        const __mmask16 adv = _mm512_mask_cmp_ps_mask(live, depth, pz, _CMP_LE_OQ);
+        exit |= __mmask16(live & ~adv);  // sampled above the ray: the listing stops
+        live = adv;
+        if (!live) return;
+        px = _mm512_mask_add_ps(px, live, px, stx);
+        py = _mm512_mask_add_ps(py, live, py, sty);
+        pz = _mm512_mask_add_ps(pz, live, pz, stz);
+        const __mmask16 above = _mm512_mask_cmp_ps_mask(live, pz, src, _CMP_GE_OQ);
+        r = _mm512_mask_mov_ps(r, above, _mm512_set1_ps(1.0f));
+        live &= __mmask16(~above);
+        // The early out at the current point, in double (ListingRatio).
+        const __m512 cxf = _mm512_sub_ps(px, sx), cyf = _mm512_sub_ps(py, sy),
+                     denf = _mm512_sub_ps(src, pz);
+        __mmask8 outs[2];
+        for (int h = 0; h < 2; ++h) {
+            const __m512d cx = h ? hi(cxf) : lo(cxf), cy = h ? hi(cyf) : lo(cyf),
+                          den = h ? hi(denf) : lo(denf);
+            outs[h] = _mm512_mask_cmp_pd_mask(
+                __mmask8((live & prune) >> (8 * h)),
+                _mm512_add_pd(_mm512_mul_pd(cx, cx), _mm512_mul_pd(cy, cy)),
+                _mm512_mul_pd(_mm512_mul_pd(h ? best2H : best2L, den), den), _CMP_GE_OQ);
+        }
+        const __mmask16 out = join(outs[0], outs[1]);
+        r = _mm512_mask_mov_ps(r, out, best);
+        live &= __mmask16(~out);
+        i = _mm512_mask_add_epi32(i, live, i, _mm512_set1_epi32(1));
+        const __mmask16 spent =
+            _mm512_mask_cmp_epi32_mask(live, i, _mm512_set1_epi32(steps), _MM_CMPINT_GE);
+        exit |= spent;
+        live &= __mmask16(~spent);
+    }
+
+    /// The ratios, once no lane is live.
+    RS_TARGET_AVX512 RS_INLINE void Ratios(float* out) {
+        if (exit) {
+            const __m512 ex = _mm512_sub_ps(px, sx), ey = _mm512_sub_ps(py, sy);
+            r = _mm512_mask_div_ps(r, exit,
+                                   _mm512_sqrt_ps(_mm512_add_ps(_mm512_mul_ps(ex, ex),
+                                                                _mm512_mul_ps(ey, ey))),
+                                   _mm512_sub_ps(src, pz));
+        }
+        _mm512_store_ps(out, r);
+    }
+};
+#pragma GCC diagnostic pop
+#endif
+
 struct RelaxedTileSearch {
     const DepthField& hf;
     const DenseOffsets& d;
@@ -947,21 +1198,7 @@ struct RelaxedTileSearch {
     std::array<double, kLanes> dApex{}, reach{};
     std::array<size_t, kLanes> laneDelta{};
     bool avx512 = false;  ///< quarters by SearchQuarterAvx512 (DenseOffsets as fields)
-    /// The pairs SearchQuarterAvx512 has kept, marched 16 at a time (MarchBatchAvx512).
-    struct Marches {
-        int n = 0;
-        alignas(64) int32_t lane[kLanes], dx[kLanes], dy[kLanes];
-        alignas(64) float b[kLanes];
-        alignas(64) double clear[kLanes];
-        void Add(int l, int x, int y, float depth, double c) {
-            lane[n] = l;
-            dx[n] = x;
-            dy[n] = y;
-            b[n] = depth;
-            clear[n] = c;
-            ++n;
-        }
-    } marches;
+    MarchQueue marches;   ///< pairs SearchQuarterAvx512 kept (MarchBatchAvx512)
     alignas(64) std::array<float, kLanes> bestOf{};  ///< tb.lane[l].best, for the vectors
     TileBest tb;
 
@@ -1198,8 +1435,10 @@ struct RelaxedTileSearch {
         }
 #if RS_HAVE_CONE_SEARCH_AVX
         if (batch) {
-            marches.Add(l, dxo, dyo, b, clear);
-            if (marches.n == kLanes) MarchBatchAvx512();
+            const size_t u = size_t(l);
+            marches.Add(l, dxo, dyo, sx[u] + float(dxo) / float(hf.width),
+                        sy[u] + float(dyo) / float(hf.height), b, clear);
+            if (marches.n == MarchQueue::kSize) MarchBatchAvx512();
             return;
         }
 #endif
@@ -1346,212 +1585,25 @@ struct RelaxedTileSearch {
         if (marches.n) MarchBatchAvx512();
     }
 
-    /// Consider for the pairs of `marches` (up to 16), with AVX-512: ListingRatio's float
-    /// and double arithmetic lane by lane, operation by operation (the same ratios; a
-    /// point whose texel coordinate is outside [-n, 2n) is sampled by WrapFloorIndex
-    /// itself). Every pair is marched against its lane's minimum as it was before the
-    /// batch (at least the scalar search's then: an early out returns that minimum,
-    /// which lowers nothing), and the minima are lowered in the batch's order.
+    /// Consider for the pairs of `marches`, with AVX-512 (MarchLanes), in two groups of
+    /// up to 16 whose marches run side by side (independent chains of latency). Every
+    /// pair is marched against its lane's minimum as it was before the batch (at least
+    /// the scalar search's then: an early out returns that minimum, which lowers
+    /// nothing); the minima are lowered in the batch's order.
     RS_TARGET_AVX512 void MarchBatchAvx512() {
         const int n = marches.n;
         marches.n = 0;
-        const int W = hf.width, H = hf.height;
-        const __mmask16 all = __mmask16((1u << n) - 1u);
-        const __m512i lane = _mm512_maskz_loadu_epi32(all, marches.lane);
-        const __m512 sxv = _mm512_permutexvar_ps(lane, _mm512_loadu_ps(sx.data())),
-                     syv = _mm512_permutexvar_ps(lane, _mm512_loadu_ps(sy.data())),
-                     src = _mm512_permutexvar_ps(lane, _mm512_loadu_ps(apex.data())),
-                     best = _mm512_permutexvar_ps(lane, _mm512_load_ps(bestOf.data()));
-        const __m512 dstx = _mm512_add_ps(
-            sxv,
-            _mm512_div_ps(_mm512_cvtepi32_ps(_mm512_maskz_loadu_epi32(all, marches.dx)),
-                          _mm512_set1_ps(float(W))));
-        const __m512 dsty = _mm512_add_ps(
-            syv,
-            _mm512_div_ps(_mm512_cvtepi32_ps(_mm512_maskz_loadu_epi32(all, marches.dy)),
-                          _mm512_set1_ps(float(H))));
-        const __m512 dstz = _mm512_maskz_loadu_ps(all, marches.b);
-        const __m512 one = _mm512_set1_ps(1.0f), inf = _mm512_set1_ps(kInfF);
-        __m512 r = one;  // the results
-        __mmask16 live = all;
-        // NaN in the listing (b <= 0); ratio 1 when the destination is not above the
-        // apex.
-        const __mmask16 nan =
-            _mm512_mask_cmp_ps_mask(live, dstz, _mm512_setzero_ps(), _CMP_NGT_UQ);
-        r = _mm512_mask_mov_ps(r, nan, inf);
-        live &= __mmask16(~nan);
-        live &= _mm512_cmp_ps_mask(dstz, src, _CMP_LT_OQ);
-        __m512 vx = _mm512_sub_ps(dstx, sxv), vy = _mm512_sub_ps(dsty, syv), vz = dstz;
-        const __mmask16 prune = _mm512_cmp_ps_mask(best, inf, _CMP_LT_OQ);
-        {
-            const __m512 lb =
-                _mm512_div_ps(_mm512_sqrt_ps(_mm512_add_ps(_mm512_mul_ps(vx, vx),
-                                                           _mm512_mul_ps(vy, vy))),
-                              _mm512_sub_ps(src, dstz));
-            const __mmask16 out =
-                _mm512_mask_cmp_ps_mask(__mmask16(live & prune), lb, best, _CMP_GE_OQ);
-            r = _mm512_mask_mov_ps(r, out, best);
-            live &= __mmask16(~out);
+        MarchLanes group[2];
+        const int n0 = std::min(n, kLanes);
+        group[0].Start(hf, steps, inv, marches, 0, n0, sx, sy, apex, bestOf);
+        group[1].Start(hf, steps, inv, marches, n0, n - n0, sx, sy, apex, bestOf);
+        while (group[0].live | group[1].live) {
+            if (group[0].live) group[0].Step(hf);
+            if (group[1].live) group[1].Step(hf);
         }
-        vx = _mm512_div_ps(vx, vz);
-        vy = _mm512_div_ps(vy, vz);
-        vz = _mm512_div_ps(vz, vz);
-        const __m512 scale = _mm512_sub_ps(one, dstz);
-        vx = _mm512_mul_ps(vx, scale);
-        vy = _mm512_mul_ps(vy, scale);
-        vz = _mm512_mul_ps(vz, scale);
-        const auto stepOf = [&](__m512 v) RS_TARGET_AVX512 {
-            return inv > 0.0f ? _mm512_mul_ps(v, _mm512_set1_ps(inv))
-                              : _mm512_div_ps(v, _mm512_set1_ps(float(steps)));
-        };
-        const __m512 stx = stepOf(vx), sty = stepOf(vy), stz = stepOf(vz);
-        __m512 px = _mm512_add_ps(dstx, stx), py = _mm512_add_ps(dsty, sty),
-               pz = _mm512_add_ps(dstz, stz);
-        live &= __mmask16(~_mm512_cmp_ps_mask(pz, src, _CMP_GE_OQ));  // r = 1
-        __m512i i = _mm512_set1_epi32(1);
-        // The samples proven inside the solid by the exit field (`clear`): only their
-        // sums.
-        {
-            __m512i k0 = _mm512_setzero_si512();
-            __mmask16 skip = 0;
-            for (int h = 0; h < 2; ++h) {
-                const __mmask8 hl = __mmask8((live & prune) >> (8 * h));
-                const __m512d clear = _mm512_loadu_pd(marches.clear + 8 * h);
-                const __m512d sxd = h ? hi(stx) : lo(stx), syd = h ? hi(sty) : lo(sty);
-                const __m512d step2 =
-                    _mm512_add_pd(_mm512_mul_pd(sxd, sxd), _mm512_mul_pd(syd, syd));
-                const __mmask8 m = __mmask8(
-                    _mm512_mask_cmp_pd_mask(hl, clear, _mm512_setzero_pd(), _CMP_GT_OQ) &
-                    _mm512_cmp_pd_mask(step2, _mm512_setzero_pd(), _CMP_GT_OQ));
-                if (!m) continue;
-                const __m512d k = _mm512_roundscale_pd(
-                    _mm512_div_pd(clear, _mm512_sqrt_pd(step2)), _MM_FROUND_TO_NEG_INF);
-                // k < steps ? int(k) : steps - 1
-                const __mmask8 small =
-                    _mm512_cmp_pd_mask(k, _mm512_set1_pd(double(steps)), _CMP_LT_OQ);
-                __m256i kk =
-                    _mm256_mask_blend_epi32(small, _mm256_set1_epi32(steps - 1),
-                                            _mm512_cvttpd_epi32(_mm512_mask_blend_pd(
-                                                small, _mm512_setzero_pd(), k)));
-                const __m512d clear2 = _mm512_mul_pd(clear, clear);
-                for (;;) {
-                    const __m512d kd = _mm512_cvtepi32_pd(kk);
-                    const __mmask8 dec = __mmask8(
-                        m &
-                        _mm256_cmp_epi32_mask(kk, _mm256_setzero_si256(), _MM_CMPINT_GT) &
-                        _mm512_cmp_pd_mask(_mm512_mul_pd(_mm512_mul_pd(kd, kd), step2),
-                                           clear2, _CMP_GE_OQ));
-                    if (!dec) break;
-                    kk = _mm256_mask_sub_epi32(kk, dec, kk, _mm256_set1_epi32(1));
-                }
-                kk = _mm256_maskz_mov_epi32(m, kk);
-                k0 = h ? _mm512_inserti64x4(k0, kk, 1) : _mm512_inserti64x4(k0, kk, 0);
-                skip |= __mmask16(unsigned(m) << (8 * h));
-            }
-            if (skip) {
-                for (int it = 1;; ++it) {
-                    const __mmask16 add = _mm512_mask_cmp_epi32_mask(
-                        skip, _mm512_set1_epi32(it), k0, _MM_CMPINT_LE);
-                    if (!add) break;
-                    px = _mm512_mask_add_ps(px, add, px, stx);
-                    py = _mm512_mask_add_ps(py, add, py, sty);
-                    pz = _mm512_mask_add_ps(pz, add, pz, stz);
-                }
-                i = _mm512_mask_add_epi32(i, skip, k0, _mm512_set1_epi32(1));
-                live &= __mmask16(~_mm512_mask_cmp_ps_mask(skip, pz, src, _CMP_GE_OQ));
-            }
-        }
-        const __m512d best2L = _mm512_mul_pd(_mm512_mul_pd(lo(best), lo(best)),
-                                             _mm512_set1_pd(1.0 + 0x1p-20)),
-                      best2H = _mm512_mul_pd(_mm512_mul_pd(hi(best), hi(best)),
-                                             _mm512_set1_pd(1.0 + 0x1p-20));
-        const __m512i stepsV = _mm512_set1_epi32(steps);
-        const __m512 fw = _mm512_set1_ps(float(W)), fh = _mm512_set1_ps(float(H));
-        const __m512i wv = _mm512_set1_epi32(W), hv = _mm512_set1_epi32(H);
-        __mmask16 exit = 0;  // lanes whose march stopped: ratio at the exit point
-        // Lanes that ran out of steps also take the ratio at their last point.
-        exit |= _mm512_mask_cmp_epi32_mask(live, i, stepsV, _MM_CMPINT_GE);
-        live &= __mmask16(~exit);
-        while (live) {
-            // NearestWrap: the texel index of u * n, floor, wrapped into [0, n).
-            const auto index = [&](__m512 p, __m512 fn, __m512i nv, int nn,
-                                   __mmask16& odd) RS_TARGET_AVX512 {
-                const __m512 f =
-                    _mm512_roundscale_ps(_mm512_mul_ps(p, fn), _MM_FROUND_TO_NEG_INF);
-                const __m512i k = _mm512_cvttps_epi32(f);
-                // [-n, 2n) in floats first: the conversion is exact there.
-                odd |= _mm512_mask_cmp_ps_mask(live, f, _mm512_set1_ps(-float(nn)),
-                                               _CMP_NGE_UQ) |
-                       _mm512_mask_cmp_ps_mask(live, f, _mm512_set1_ps(2.0f * float(nn)),
-                                               _CMP_NLT_UQ);
-                __m512i w = _mm512_mask_add_epi32(
-                    k, _mm512_cmp_epi32_mask(k, _mm512_setzero_si512(), _MM_CMPINT_LT), k,
-                    nv);
-                w = _mm512_mask_sub_epi32(w, _mm512_cmp_epi32_mask(w, nv, _MM_CMPINT_NLT),
-                                          w, nv);
-                return w;
-            };
-            __mmask16 odd = 0;
-            __m512i ix = index(px, fw, wv, W, odd), iy = index(py, fh, hv, H, odd);
-            if (odd) {
-                alignas(64) int32_t xs[16], ys[16];
-                alignas(64) float us[16], vs[16];
-                _mm512_store_si512(xs, ix);
-                _mm512_store_si512(ys, iy);
-                _mm512_store_ps(us, px);
-                _mm512_store_ps(vs, py);
-                for (unsigned m = odd; m; m &= m - 1) {
-                    const int l = std::countr_zero(m);
-                    xs[l] = WrapFloorIndex(us[l] * float(W), W);
-                    ys[l] = WrapFloorIndex(vs[l] * float(H), H);
-                }
-                ix = _mm512_load_si512(xs);
-                iy = _mm512_load_si512(ys);
-            }
-            const __m512 depth = _mm512_mask_i32gather_ps(
-                _mm512_setzero_ps(), live,
-                _mm512_add_epi32(_mm512_mullo_epi32(iy, wv), ix), hf.depth.data(), 4);
-            const __mmask16 adv = _mm512_mask_cmp_ps_mask(live, depth, pz, _CMP_LE_OQ);
-            exit |= __mmask16(live & ~adv);  // sampled above the ray: the listing stops
-            live = adv;
-            if (!live) break;
-            px = _mm512_mask_add_ps(px, live, px, stx);
-            py = _mm512_mask_add_ps(py, live, py, sty);
-            pz = _mm512_mask_add_ps(pz, live, pz, stz);
-            const __mmask16 above = _mm512_mask_cmp_ps_mask(live, pz, src, _CMP_GE_OQ);
-            r = _mm512_mask_mov_ps(r, above, one);
-            live &= __mmask16(~above);
-            // The early out at the current point, in double (ListingRatio).
-            const __m512 cxf = _mm512_sub_ps(px, sxv), cyf = _mm512_sub_ps(py, syv),
-                         denf = _mm512_sub_ps(src, pz);
-            __mmask8 outs[2];
-            for (int h = 0; h < 2; ++h) {
-                const __m512d cx = h ? hi(cxf) : lo(cxf), cy = h ? hi(cyf) : lo(cyf),
-                              den = h ? hi(denf) : lo(denf);
-                outs[h] = _mm512_mask_cmp_pd_mask(
-                    __mmask8((live & prune) >> (8 * h)),
-                    _mm512_add_pd(_mm512_mul_pd(cx, cx), _mm512_mul_pd(cy, cy)),
-                    _mm512_mul_pd(_mm512_mul_pd(h ? best2H : best2L, den), den),
-                    _CMP_GE_OQ);
-            }
-            const __mmask16 out = join(outs[0], outs[1]);
-            r = _mm512_mask_mov_ps(r, out, best);
-            live &= __mmask16(~out);
-            i = _mm512_mask_add_epi32(i, live, i, _mm512_set1_epi32(1));
-            const __mmask16 spent =
-                _mm512_mask_cmp_epi32_mask(live, i, stepsV, _MM_CMPINT_GE);
-            exit |= spent;
-            live &= __mmask16(~spent);
-        }
-        {
-            const __m512 ex = _mm512_sub_ps(px, sxv), ey = _mm512_sub_ps(py, syv);
-            r = _mm512_mask_div_ps(r, exit,
-                                   _mm512_sqrt_ps(_mm512_add_ps(_mm512_mul_ps(ex, ex),
-                                                                _mm512_mul_ps(ey, ey))),
-                                   _mm512_sub_ps(src, pz));
-        }
-        alignas(64) float rs[16];
-        _mm512_store_ps(rs, r);
+        alignas(64) float rs[2 * kLanes];
+        group[0].Ratios(rs);
+        group[1].Ratios(rs + kLanes);
         for (int k = 0; k < n; ++k) {
             const int l = marches.lane[k];
             RelaxedBest& rb = tb.lane[size_t(l)];
