@@ -381,26 +381,45 @@ RS_INLINE SectorBits OpenSectors(const float* L, SectorBits mask, float v) {
     return SectorBits(open & mask);
 }
 
-/// The exit field of texel (i, j) into L[0..kSectors): per sector, the distance to the
-/// nearest cell deeper than d (the march's z after its first step) in the window, `edge`
-/// when none is. max8, max32: depth maxima over the 8x8 and 32x32 windows (tiles and
-/// super-tiles without a deeper cell are skipped).
-void ExitDistancesOfTexel(const DepthField& hf, const ExitWindow& win,
-                          const std::vector<float>& max8, const std::vector<float>& max32,
-                          int i, int j, float d, float edge, float* L) {
+/// A texel's 16 sector distances for ExitScan, as an array (the scalar build; the AVX-512
+/// one keeps them in one register, VectorSectors).
+struct ScalarSectors {
+    float L[kSectors];
+    explicit ScalarSectors(float edge) { std::fill(L, L + kSectors, edge); }
+    /// Sectors of `mask` whose distance is above v.
+    SectorBits Open(SectorBits mask, float v) const { return OpenSectors(L, mask, v); }
+    /// The 8 cells row[0..8) deeper than d, one bit each.
+    static unsigned Deeper(const float* row, float d) {
+        unsigned bits = 0;
+        for (int b = 0; b < kTile; ++b) bits |= unsigned(row[b] > d) << b;
+        return bits;
+    }
+    /// Lowers the sectors of `mask` to v; true when one was above it.
+    bool Lower(SectorBits mask, float v) { return LowerMasked(unsigned(mask), v, L); }
+    float Worst() const { return *std::max_element(L, L + kSectors); }
+    void Store(float* out) const { std::copy(L, L + kSectors, out); }
+};
+
+/// The exit field of texel (i, j) into L (ScalarSectors or VectorSectors): per sector,
+/// the distance to the nearest cell deeper than d (the march's z after its first step)
+/// in the window, `edge` when none is. max8, max32: depth maxima over the 8x8 and 32x32
+/// windows (tiles and super-tiles without a deeper cell are skipped).
+template <class Sectors>
+inline void ExitScan(const DepthField& hf, const ExitWindow& win,
+                     const std::vector<float>& max8, const std::vector<float>& max32,
+                     int i, int j, float d, float edge, Sectors& L) {
     const int W = hf.width, H = hf.height;
-    std::fill(L, L + kSectors, edge);
     float worst = edge;
     for (const ExitSuper& st : win.supers) {
         if (st.minDist >= worst) break;
-        if (!OpenSectors(L, st.mask, st.minDist)) continue;
+        if (!L.Open(st.mask, st.minDist)) continue;
         if (!(max32[size_t(WrapFast(j + st.oy, H)) * size_t(W) +
                     size_t(WrapFast(i + st.ox, W))] > d))
             continue;
         for (int x = st.first; x < st.last; ++x) {
             const ExitTile& t = win.tiles[size_t(x)];
             if (t.minDist >= worst) break;  // sorted by distance
-            const SectorBits open = OpenSectors(L, t.mask, t.minDist);
+            const SectorBits open = L.Open(t.mask, t.minDist);
             if (!open) continue;
             const int wy = WrapFast(j + t.oy, H), wx = WrapFast(i + t.ox, W);
             if (!(max8[size_t(wy) * size_t(W) + size_t(wx)] > d)) continue;
@@ -417,8 +436,7 @@ void ExitDistancesOfTexel(const DepthField& hf, const ExitWindow& win,
                 const float* row = &hf.depth[size_t(WrapFast(wy + a, H)) * size_t(W)];
                 unsigned bits = 0;
                 if (wx + kTile <= W) {
-                    for (int b = 0; b < kTile; ++b)
-                        bits |= unsigned(row[wx + b] > d) << b;
+                    bits = Sectors::Deeper(row + wx, d);
                 } else {
                     for (int b = 0; b < kTile; ++b)
                         bits |= unsigned(row[WrapFast(wx + b, W)] > d) << b;
@@ -429,83 +447,56 @@ void ExitDistancesOfTexel(const DepthField& hf, const ExitWindow& win,
             for (; deeper; deeper &= deeper - 1) {
                 const ExitOffset& off =
                     win.offs[size_t(t.begin + std::countr_zero(deeper))];
-                changed |= LowerMasked(unsigned(off.mask), off.dist, L);
+                changed |= L.Lower(off.mask, off.dist);
             }
-            if (changed) worst = *std::max_element(L, L + kSectors);
+            if (changed) worst = L.Worst();
         }
     }
+}
+
+/// ExitScan into L[0..kSectors), scalar.
+void ExitDistancesOfTexel(const DepthField& hf, const ExitWindow& win,
+                          const std::vector<float>& max8, const std::vector<float>& max32,
+                          int i, int j, float d, float edge, float* L) {
+    ScalarSectors sectors(edge);
+    ExitScan(hf, win, max8, max32, i, j, d, edge, sectors);
+    sectors.Store(L);
 }
 
 #if RS_HAVE_CONE_SEARCH_AVX
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC bug 105593, see below
 #pragma GCC diagnostic ignored "-Wuninitialized"
-/// ExitDistancesOfTexel with AVX-512: the 16 sectors' distances in one vector; the same
-/// comparisons and minima, so the same distances.
-RS_TARGET_AVX512 void ExitDistancesOfTexelAvx512(const DepthField& hf,
-                                                 const ExitWindow& win,
-                                                 const std::vector<float>& max8,
-                                                 const std::vector<float>& max32, int i,
-                                                 int j, float d, float edge, float* out) {
-    const int W = hf.width, H = hf.height;
-    __m512 L = _mm512_set1_ps(edge);
-    float worst = edge;
-    const __m256 deep = _mm256_set1_ps(d);
-    // OpenSectors: the sectors of `mask` whose distance is above v.
-#define RS_OPEN(mask, v) \
-    _mm512_mask_cmp_ps_mask(__mmask16(mask), L, _mm512_set1_ps(v), _CMP_GT_OQ)
-    for (const ExitSuper& st : win.supers) {
-        if (st.minDist >= worst) break;
-        if (!RS_OPEN(st.mask, st.minDist)) continue;
-        if (!(max32[size_t(WrapFast(j + st.oy, H)) * size_t(W) +
-                    size_t(WrapFast(i + st.ox, W))] > d))
-            continue;
-        for (int x = st.first; x < st.last; ++x) {
-            const ExitTile& t = win.tiles[size_t(x)];
-            if (t.minDist >= worst) break;  // sorted by distance
-            const unsigned sectors = RS_OPEN(t.mask, t.minDist);
-            if (!sectors) continue;
-            const int wy = WrapFast(j + t.oy, H), wx = WrapFast(i + t.ox, W);
-            if (!(max8[size_t(wy) * size_t(W) + size_t(wx)] > d)) continue;
-            const uint64_t* slotsOf =
-                &win.sectorSlots[size_t(t.begin / (kTile * kTile)) * kSectors];
-            uint64_t wanted = 0;
-            for (unsigned m = sectors; m; m &= m - 1)
-                wanted |= slotsOf[std::countr_zero(m)];
-            uint64_t deeper = 0;
-            for (int a = 0; a < kTile; ++a) {
-                const unsigned rowWanted = unsigned(wanted >> (kTile * a)) & 0xFFu;
-                if (!rowWanted) continue;
-                const float* row = &hf.depth[size_t(WrapFast(wy + a, H)) * size_t(W)];
-                unsigned bits = 0;
-                if (wx + kTile <= W) {
-                    bits =
-                        _mm256_cmp_ps_mask(_mm256_loadu_ps(row + wx), deep, _CMP_GT_OQ);
-                } else {
-                    for (int b = 0; b < kTile; ++b)
-                        bits |= unsigned(row[WrapFast(wx + b, W)] > d) << b;
-                }
-                deeper |= uint64_t(bits & rowWanted) << (kTile * a);
-            }
-            bool changed = false;
-            for (; deeper; deeper &= deeper - 1) {
-                const ExitOffset& off =
-                    win.offs[size_t(t.begin + std::countr_zero(deeper))];
-                // LowerMasked: the sectors of the cell's mask whose distance is above
-                // its.
-                const __m512 v = _mm512_set1_ps(off.dist);
-                const __mmask16 lower =
-                    _mm512_mask_cmp_ps_mask(__mmask16(off.mask), v, L, _CMP_LT_OQ);
-                if (lower) {
-                    L = _mm512_mask_mov_ps(L, lower, v);
-                    changed = true;
-                }
-            }
-            if (changed) worst = _mm512_reduce_max_ps(L);
-        }
+/// ScalarSectors in one AVX-512 register: the same comparisons and minima, so the same
+/// distances.
+struct VectorSectors {
+    __m512 L;
+    RS_TARGET_AVX512 explicit VectorSectors(float edge) : L(_mm512_set1_ps(edge)) {}
+    RS_TARGET_AVX512 SectorBits Open(SectorBits mask, float v) const {
+        return _mm512_mask_cmp_ps_mask(__mmask16(mask), L, _mm512_set1_ps(v), _CMP_GT_OQ);
     }
-    _mm512_storeu_ps(out, L);
-#undef RS_OPEN
+    RS_TARGET_AVX512 static unsigned Deeper(const float* row, float d) {
+        return _mm256_cmp_ps_mask(_mm256_loadu_ps(row), _mm256_set1_ps(d), _CMP_GT_OQ);
+    }
+    RS_TARGET_AVX512 bool Lower(SectorBits mask, float v) {
+        const __m512 x = _mm512_set1_ps(v);
+        const __mmask16 lower =
+            _mm512_mask_cmp_ps_mask(__mmask16(mask), x, L, _CMP_LT_OQ);
+        L = _mm512_mask_mov_ps(L, lower, x);
+        return lower != 0;
+    }
+    RS_TARGET_AVX512 float Worst() const { return _mm512_reduce_max_ps(L); }
+    RS_TARGET_AVX512 void Store(float* out) const { _mm512_storeu_ps(out, L); }
+};
+
+/// ExitScan into L[0..kSectors), with AVX-512 (flatten: ExitScan and the methods it
+/// calls are compiled into it, for AVX-512).
+RS_TARGET_AVX512 __attribute__((flatten)) void ExitDistancesOfTexelAvx512(
+    const DepthField& hf, const ExitWindow& win, const std::vector<float>& max8,
+    const std::vector<float>& max32, int i, int j, float d, float edge, float* L) {
+    VectorSectors sectors(edge);
+    ExitScan(hf, win, max8, max32, i, j, d, edge, sectors);
+    sectors.Store(L);
 }
 #pragma GCC diagnostic pop
 #endif
@@ -875,7 +866,8 @@ struct TileBest {
 #if RS_HAVE_CONE_SEARCH_AVX
 // GCC 12's AVX-512 intrinsics start some results from _mm512_undefined_*(), which
 // -W(maybe-)uninitialized reports where they are inlined (GCC bug 105593, fixed in GCC
-// 13): off for this file's AVX-512 code (the helpers below and PairLanesAvx512).
+// 13): off for this file's AVX-512 code (the helpers below, MarchLanes and the
+// search's *Avx512 functions).
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 #pragma GCC diagnostic ignored "-Wuninitialized"
@@ -971,13 +963,12 @@ struct MarchLanes {
     __m512i i;
 
     /// The pairs [first, first + n) of q; sxOf, syOf, apexOf, bestOf: per search lane.
-    RS_TARGET_AVX512 RS_INLINE void Start(const DepthField& hf, int nSteps, float inv,
-                                          const MarchQueue& q, int first, int n,
+    RS_TARGET_AVX512 RS_INLINE void Start(int nSteps, float inv, const MarchQueue& q,
+                                          int first, int n,
                                           const std::array<float, kLanes>& sxOf,
                                           const std::array<float, kLanes>& syOf,
                                           const std::array<float, kLanes>& apexOf,
                                           const std::array<float, kLanes>& bestOf) {
-        static_cast<void>(hf);
         steps = nSteps;
         const __mmask16 all = __mmask16((1u << n) - 1u);
         live = all;
@@ -1595,8 +1586,8 @@ struct RelaxedTileSearch {
         marches.n = 0;
         MarchLanes group[2];
         const int n0 = std::min(n, kLanes);
-        group[0].Start(hf, steps, inv, marches, 0, n0, sx, sy, apex, bestOf);
-        group[1].Start(hf, steps, inv, marches, n0, n - n0, sx, sy, apex, bestOf);
+        group[0].Start(steps, inv, marches, 0, n0, sx, sy, apex, bestOf);
+        group[1].Start(steps, inv, marches, n0, n - n0, sx, sy, apex, bestOf);
         while (group[0].live | group[1].live) {
             if (group[0].live) group[0].Step(hf);
             if (group[1].live) group[1].Step(hf);
