@@ -13,7 +13,10 @@
 // Stages: BuildExitField, MakeDenseOffsets and MakeLaneWindows set up the bounds,
 // RelaxedTileSearch::SearchTile searches one tile (super-tiles, tiles, quarters,
 // destinations). Proofs, with the slack terms for float error: docs/cone_maps.md, section
-// "Exact pruning of the Listing".
+// "Exact pruning of the Listing". Where the lane search runs AVX-512 (ConeSearchIsa), the
+// exit field's scan, the window and pair bounds and the marches run in vector registers
+// (the *Avx512 functions, VectorSectors, MarchLanes) with the same arithmetic: the same
+// maps (docs/cone_maps.md, "With AVX-512").
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -1569,7 +1572,7 @@ struct RelaxedTileSearch {
                 const int i = std::countr_zero(k);
                 const OffsetBounds ob = d.At(o0 + size_t(i >> 2) * pitch + size_t(i & 3));
                 MarchPair(l, q.ex + (i & 3), q.ey + (i >> 2), colOf[i & 3], rowOf[i >> 2],
-                          depthOf[i], ob, double(lpOf[i]),
+                          depthOf[i], ob, ef.usable ? double(lpOf[i]) : 0.0,
                           double(ob.stepK) * double(shallowOf[i]), true);
             }
         }
