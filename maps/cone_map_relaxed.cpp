@@ -398,7 +398,16 @@ struct ScalarSectors {
         return bits;
     }
     /// Lowers the sectors of `mask` to v; true when one was above it.
-    bool Lower(SectorBits mask, float v) { return LowerMasked(unsigned(mask), v, L); }
+    /// Lowers the sectors of each cell (bit s of `cells`: offs[s]) to its distance; true
+    /// when one was above it.
+    bool LowerCells(uint64_t cells, const ExitOffset* offs) {
+        bool changed = false;
+        for (; cells; cells &= cells - 1) {
+            const ExitOffset& off = offs[std::countr_zero(cells)];
+            changed |= LowerMasked(unsigned(off.mask), off.dist, L);
+        }
+        return changed;
+    }
     float Worst() const { return *std::max_element(L, L + kSectors); }
     void Store(float* out) const { std::copy(L, L + kSectors, out); }
 };
@@ -446,13 +455,7 @@ inline void ExitScan(const DepthField& hf, const ExitWindow& win,
                 }
                 deeper |= uint64_t(bits & rowWanted) << (kTile * a);
             }
-            bool changed = false;
-            for (; deeper; deeper &= deeper - 1) {
-                const ExitOffset& off =
-                    win.offs[size_t(t.begin + std::countr_zero(deeper))];
-                changed |= L.Lower(off.mask, off.dist);
-            }
-            if (changed) worst = L.Worst();
+            if (L.LowerCells(deeper, &win.offs[size_t(t.begin)])) worst = L.Worst();
         }
     }
 }
@@ -481,12 +484,20 @@ struct VectorSectors {
     RS_TARGET_AVX512 static unsigned Deeper(const float* row, float d) {
         return _mm256_cmp_ps_mask(_mm256_loadu_ps(row), _mm256_set1_ps(d), _CMP_GT_OQ);
     }
-    RS_TARGET_AVX512 bool Lower(SectorBits mask, float v) {
-        const __m512 x = _mm512_set1_ps(v);
-        const __mmask16 lower =
-            _mm512_mask_cmp_ps_mask(__mmask16(mask), x, L, _CMP_LT_OQ);
-        L = _mm512_mask_mov_ps(L, lower, x);
-        return lower != 0;
+    /// The cells in four running minima (independent chains), then their minimum: the
+    /// same minimum as one cell after the other.
+    RS_TARGET_AVX512 bool LowerCells(uint64_t cells, const ExitOffset* offs) {
+        __m512 m[4] = {L, L, L, L};
+        for (int k = 0; cells; cells &= cells - 1, k = (k + 1) & 3) {
+            const ExitOffset& off = offs[std::countr_zero(cells)];
+            m[k] = _mm512_mask_min_ps(m[k], __mmask16(off.mask), m[k],
+                                      _mm512_set1_ps(off.dist));
+        }
+        const __m512 lowered =
+            _mm512_min_ps(_mm512_min_ps(m[0], m[1]), _mm512_min_ps(m[2], m[3]));
+        const bool changed = _mm512_cmp_ps_mask(lowered, L, _CMP_LT_OQ) != 0;
+        L = lowered;
+        return changed;
     }
     RS_TARGET_AVX512 float Worst() const { return _mm512_reduce_max_ps(L); }
     RS_TARGET_AVX512 void Store(float* out) const { _mm512_storeu_ps(out, L); }
