@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <memory>
 #include <string>
@@ -52,11 +53,34 @@ void GenerateBilinearOnce(benchmark::State& state,
                             int64_t(field->height));
 }
 
+/// The relaxed map by the scalar search (RS_CONE_SEARCH_ISA=sse4.1 for the run; the
+/// default picks the AVX-512 search where the CPU has it: docs/cone_maps.md, "With
+/// AVX-512"). The same map.
+void GenerateRelaxedScalar(benchmark::State& state,
+                           std::shared_ptr<const DepthField> field) {
+    const char* old = std::getenv("RS_CONE_SEARCH_ISA");
+    const std::string saved = old ? old : "";
+    setenv("RS_CONE_SEARCH_ISA", "sse4.1", 1);
+    GenerateOnce(state, field, ConeKind::Relaxed);
+    if (old)
+        setenv("RS_CONE_SEARCH_ISA", saved.c_str(), 1);
+    else
+        unsetenv("RS_CONE_SEARCH_ISA");
+}
+
 /// One benchmark per map and kind, named BM_ConeMap/<map>/<kind>, and per kind with a
-/// bilinear-bound variant BM_ConeMapBilinear/<map>/<kind> (`--cone-bounds bilinear`).
-/// Each generation is one iteration (they take seconds).
+/// bilinear-bound variant BM_ConeMapBilinear/<map>/<kind> (`--cone-bounds bilinear`);
+/// BM_RelaxedScalar/<map>: the relaxed map by the scalar search (the reporter prints
+/// its ratio to BM_ConeMap/<map>/relaxed when both ran). Each generation is one
+/// iteration (they take seconds).
 void RegisterMap(const std::string& name, std::shared_ptr<const DepthField> field,
                  bool conservativeOnly = false) {
+    if (!conservativeOnly)
+        benchmark::RegisterBenchmark(("BM_RelaxedScalar/" + name).c_str(),
+                                     GenerateRelaxedScalar, field)
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime()
+            ->Iterations(1);
     for (const NamedKind& k : kKinds) {
         if (conservativeOnly && k.kind != ConeKind::Cone) continue;
         benchmark::RegisterBenchmark(("BM_ConeMap/" + name + "/" + k.name).c_str(),
@@ -142,13 +166,27 @@ BENCHMARK(BM_Acm4Adaptive)
 
 /// Prints, after the runs, the exponent of the time's growth with the side n of each
 /// kind's scaling family (least squares of log time on log n; N² log N gives about 2.1
-/// to 2.2 over 256..2048).
+/// to 2.2 over 256..2048), and per map the relaxed search's time over the scalar
+/// search's (BM_ConeMap/<map>/relaxed over BM_RelaxedScalar/<map>).
 class ScalingReporter : public benchmark::ConsoleReporter {
   public:
     void ReportRuns(const std::vector<Run>& runs) override {
         ConsoleReporter::ReportRuns(runs);
         for (const Run& r : runs) {
             const std::string name = r.benchmark_name();
+            if (r.error_occurred) continue;
+            const std::string scalar = "BM_RelaxedScalar/", cone = "BM_ConeMap/";
+            const std::string relaxed = "/relaxed/";
+            if (name.rfind(scalar, 0) == 0) {
+                const std::string map = name.substr(
+                    scalar.size(), name.find('/', scalar.size()) - scalar.size());
+                relaxed_[map].second = r.GetAdjustedRealTime();
+            } else if (name.rfind(cone, 0) == 0 &&
+                       name.find(relaxed) != std::string::npos) {
+                const std::string map =
+                    name.substr(cone.size(), name.find('/', cone.size()) - cone.size());
+                relaxed_[map].first = r.GetAdjustedRealTime();
+            }
             const std::string prefix = "BM_ConeMapScaling/";
             if (name.rfind(prefix, 0) != 0 || r.error_occurred) continue;
             const size_t slash = name.find('/', prefix.size());
@@ -174,10 +212,16 @@ class ScalingReporter : public benchmark::ConsoleReporter {
             std::printf("fitted exponent of %s (time ~ n^e over %zu sizes): e = %.2f\n",
                         kind.c_str(), p.size(), slope);
         }
+        for (const auto& [map, t] : relaxed_)
+            if (t.first > 0 && t.second > 0)
+                std::printf(
+                    "relaxed on %s: %.2fx the scalar search's time (%.0f / %.0f ms)\n",
+                    map.c_str(), t.first / t.second, t.first, t.second);
     }
 
   private:
     std::map<std::string, std::vector<std::pair<double, double>>> points_;
+    std::map<std::string, std::pair<double, double>> relaxed_;  ///< default, scalar
 };
 
 }  // namespace
