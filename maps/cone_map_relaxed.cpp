@@ -40,6 +40,19 @@
 /// The AVX-512 parts of the search (where the lane search uses AVX-512, ConeSearchIsa):
 /// compiled for it whatever the build's target, called only where the CPU has it.
 #define RS_TARGET_AVX512 __attribute__((target("avx512f,avx512dq,avx512bw,avx512vl")))
+// GCC 12's AVX-512 intrinsics start some results from _mm512_undefined_*(), which
+// -W(maybe-)uninitialized reports where they are inlined (GCC bug 105593, fixed in GCC
+// 13): off around this file's AVX-512 code.
+#if defined(__clang__)
+#define RS_AVX512_WARNINGS_OFF _Pragma("clang diagnostic push")
+#define RS_AVX512_WARNINGS_ON _Pragma("clang diagnostic pop")
+#else
+#define RS_AVX512_WARNINGS_OFF                                      \
+    _Pragma("GCC diagnostic push")                                  \
+        _Pragma("GCC diagnostic ignored \"-Wmaybe-uninitialized\"") \
+            _Pragma("GCC diagnostic ignored \"-Wuninitialized\"")
+#define RS_AVX512_WARNINGS_ON _Pragma("GCC diagnostic pop")
+#endif
 #endif
 
 namespace reliefsim::detail {
@@ -470,9 +483,7 @@ void ExitDistancesOfTexel(const DepthField& hf, const ExitWindow& win,
 }
 
 #if RS_HAVE_CONE_SEARCH_AVX
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC bug 105593, see below
-#pragma GCC diagnostic ignored "-Wuninitialized"
+RS_AVX512_WARNINGS_OFF
 /// ScalarSectors in one AVX-512 register: the same comparisons and minima, so the same
 /// distances.
 struct VectorSectors {
@@ -512,7 +523,7 @@ RS_TARGET_AVX512 __attribute__((flatten)) void ExitDistancesOfTexelAvx512(
     ExitScan(hf, win, max8, max32, i, j, d, edge, sectors);
     sectors.Store(L);
 }
-#pragma GCC diagnostic pop
+RS_AVX512_WARNINGS_ON
 #endif
 
 /// The exit field (ExitField) of a map for `steps` steps; empty (usable = false) when
@@ -520,7 +531,7 @@ RS_TARGET_AVX512 __attribute__((flatten)) void ExitDistancesOfTexelAvx512(
 /// maxima over 8x8 and 32x32 windows.
 ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted,
                          const std::vector<float>& max8, const std::vector<float>& max32,
-                         bool avx512) {
+                         [[maybe_unused]] bool avx512) {
     ExitField f = MakeExitFieldSlack(hf, steps);
     f.usable = f.usable && wanted;
     if (!f.usable) return f;
@@ -878,13 +889,7 @@ struct TileBest {
 };
 
 #if RS_HAVE_CONE_SEARCH_AVX
-// GCC 12's AVX-512 intrinsics start some results from _mm512_undefined_*(), which
-// -W(maybe-)uninitialized reports where they are inlined (GCC bug 105593, fixed in GCC
-// 13): off for this file's AVX-512 code (the helpers below, MarchLanes and the
-// search's *Avx512 functions).
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC diagnostic ignored "-Wuninitialized"
+RS_AVX512_WARNINGS_OFF
 /// Lanes 0..7 and 8..15 of a float vector, as doubles; two 8-lane masks as one.
 RS_TARGET_AVX512 inline __m512d lo(__m512 v) {
     return _mm512_maskz_cvtps_pd(0xFF, _mm512_castps512_ps256(v));
@@ -934,7 +939,7 @@ RS_TARGET_AVX512 inline __mmask8 ExitBoundPrunes8(const ExitField& f, __m512d dL
         _mm512_mul_pd(best, den), _CMP_GE_OQ);
     return __mmask8(moves & (below | far));
 }
-#pragma GCC diagnostic pop
+RS_AVX512_WARNINGS_ON
 #endif
 
 /// Pairs waiting for their marches (RelaxedTileSearch::MarchBatchAvx512): the lane, the
@@ -959,9 +964,7 @@ struct MarchQueue {
 };
 
 #if RS_HAVE_CONE_SEARCH_AVX
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC bug 105593, see above
-#pragma GCC diagnostic ignored "-Wuninitialized"
+RS_AVX512_WARNINGS_OFF
 /// ListingRatio for up to 16 pairs at once, one vector lane each: its float and double
 /// arithmetic lane by lane, operation by operation (no contraction: -ffp-contract=off),
 /// so the same ratios. A sampled point whose texel coordinate is outside [-n, 2n) takes
@@ -1184,7 +1187,7 @@ struct MarchLanes {
         _mm512_store_ps(out, r);
     }
 };
-#pragma GCC diagnostic pop
+RS_AVX512_WARNINGS_ON
 #endif
 
 struct RelaxedTileSearch {
@@ -1452,9 +1455,7 @@ struct RelaxedTileSearch {
     }
 
 #if RS_HAVE_CONE_SEARCH_AVX
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-#pragma GCC diagnostic ignored "-Wuninitialized"
+    RS_AVX512_WARNINGS_OFF
     /// GroupLanes with AVX-512, all lanes at once in its double arithmetic operation by
     /// operation (the same lanes are kept).
     RS_TARGET_AVX512 LaneBits GroupLanesAvx512(const LaneGroup& q, LaneBits lanes,
@@ -1621,7 +1622,7 @@ struct RelaxedTileSearch {
             }
         }
     }
-#pragma GCC diagnostic pop
+    RS_AVX512_WARNINGS_ON
 #endif
 
     /// The minima of the tile at (ti, tj) (texels ti..ti+3, tj..tj+3 inside the map) for
