@@ -151,13 +151,13 @@ double CellHi(int c, int k, int n) { return double(std::min((c + 1) << k, n) - 1
 
 /// A texel at (x, y) of depth b as a child for CombinePlanes.
 PlaneChild TexelChild(double x, double y, float b) {
-    return {x, x, y, y, b, 0.0, 0.0, b};
+    return {x, x, y, y, double(b), 0.0, 0.0, b};
 }
 
 /// A cell's child for CombinePlanes from its plane and box.
 PlaneChild ChildOf(const ConeSearchData::LowerPlane& p, double x0, double x1, double y0,
                    double y1) {
-    return {x0, x1, y0, y1, p.q0, p.gx, p.gy, p.least};
+    return {x0, x1, y0, y1, double(p.q0), double(p.gx), double(p.gy), p.least};
 }
 
 /// The lower planes of the quadtree's cells (ConeSearchData::LowerPlane), levels 1..top,
