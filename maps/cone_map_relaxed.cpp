@@ -680,16 +680,70 @@ struct RelaxedBest {
     bool found = false;
 };
 
+/// The windows ahead of a destination (AheadPrunes) in one line: the greatest depth of
+/// the 2^(k+1)-square window for k = 0..6 (2x2 to 128x128) that starts at the texel and
+/// extends in one quadrant, each as a code whose value (AheadDepth) is at least it.
+struct alignas(8) AheadCodes {
+    static constexpr size_t kLevels = 7;
+    std::array<uint8_t, 8> code{0, 0, 0, 0, 0, 0, 0, 255};  // the last one unused
+};
+
+/// The value of an AheadCodes code: code / 255, in double (255: 1, the deepest depth).
+constexpr double kAheadScale = 1.0 / 255.0;
+inline double AheadDepth(uint8_t c) { return double(c) * kAheadScale; }
+
+/// The least code whose value is at least the depth d, which lies in [0, 1] (255 for
+/// NaN).
+inline uint8_t AheadCode(float d) {
+    if (!(d < 1.0f)) return 255;
+    if (!(d > 0.0f)) return 0;
+    auto c = int(std::ceil(double(d) * 255.0));
+    while (AheadDepth(uint8_t(c)) < double(d)) ++c;  // the product's rounding
+    while (c > 0 && AheadDepth(uint8_t(c - 1)) >= double(d)) --c;
+    return uint8_t(c);
+}
+
 /// Per texel, over the windows of the search's groups starting there (4x4 quarters, 8x8
 /// tiles, 32x32 super-tiles): the least and the greatest depth; and (1 - b) / b of the
 /// texel's own depth b, rounded down (0 where b = 0).
 struct DepthWindows {
     std::vector<float> min4, min8, min32;
-    /// max[k]: the greatest depth over the 2^(k+1)-square windows, k = 0..6 (2x2 to
-    /// 128x128; the groups use 4, 8 and 32, AheadPrunes all of them).
-    std::array<std::vector<float>, 7> max;
+    std::vector<float> max4, max8, max32;
+    /// ahead[q]: per texel, the windows ahead in quadrant q (bit 0: towards -x, bit 1:
+    /// towards -y), rounded up (AheadCodes): a pair's windows are one load of 8 bytes.
+    std::array<std::vector<AheadCodes>, 4> ahead;
     std::vector<float> shallow;
 };
+
+/// DepthWindows::ahead, from the groups' maxima (4x4, 8x8, 32x32) and the other levels',
+/// made one at a time (peak memory at 2048²).
+void MakeWindowsAhead(DepthWindows& dw, const std::vector<float>& depth, int W, int H) {
+    const size_t n = size_t(W) * size_t(H);
+    for (auto& ahead : dw.ahead) ahead.assign(n, AheadCodes{});
+    // Level k: the (2 << k)-square windows; max holds their maxima where they start.
+    const auto fill = [&](size_t level, const std::vector<float>& max) {
+        const int k = 2 << level;
+        tbb::parallel_for(
+            tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& r) {
+                for (int y = r.begin(); y < r.end(); ++y)
+                    for (int x = 0; x < W; ++x)
+                        for (size_t q = 0; q < 4; ++q) {
+                            const int x0 = (q & 1) ? WrapFast(x - (k - 1), W) : x;
+                            const int y0 = (q & 2) ? WrapFast(y - (k - 1), H) : y;
+                            dw.ahead[q][size_t(y) * size_t(W) + size_t(x)].code[level] =
+                                AheadCode(max[size_t(y0) * size_t(W) + size_t(x0)]);
+                        }
+            });
+    };
+    fill(0, WindowMaxima(depth, W, H, 2));
+    fill(1, dw.max4);
+    fill(2, dw.max8);
+    fill(3, WindowMaxima(dw.max8, W, H, 2, 8));
+    fill(4, dw.max32);
+    std::vector<float> max64 = WindowMaxima(dw.max32, W, H, 2, 32);
+    fill(5, max64);
+    fill(6, WindowMaxima(max64, W, H, 2, 64));
+}
 
 /// The apex-tile search: the 4x4 source texels of a tile (its lanes) searched together,
 /// so that each destination's depth and exit-field bytes are loaded once for the 16
@@ -1208,15 +1262,22 @@ struct RelaxedTileSearch {
     bool avx512 = false;  ///< quarters by SearchQuarterAvx512 (DenseOffsets as fields)
     MarchQueue marches;   ///< pairs SearchQuarterAvx512 kept (MarchBatchAvx512)
     alignas(64) std::array<float, kLanes> bestOf{};  ///< tb.lane[l].best, for the vectors
+    /// AheadPrunes' travel a clear window of each level proves, and (AheadPrunesAvx512)
+    /// the one the levels before it prove (-inf for the first).
+    alignas(64) std::array<double, 8> provenAt{}, provenBefore{};
     TileBest tb;
 
     RelaxedTileSearch(const DepthField& hf, const DenseOffsets& d, const LaneWindows& lw,
                       const DepthWindows& dw, const ExitField& ef, int steps, float inv,
                       float dmin)
         : hf(hf), d(d), lw(lw), dw(dw), ef(ef), steps(steps), inv(inv), dmin(dmin) {
-        for (int l = 0; l < kLanes; ++l) {
+        for (int l = 0; l < kLanes; ++l)
             laneDelta[size_t(l)] =
                 size_t(l / kApexSide) * size_t(d.pitch) + size_t(l % kApexSide);
+        const double texel = std::min(1.0 / double(hf.width), 1.0 / double(hf.height));
+        for (size_t level = 0; level < provenAt.size(); ++level) {
+            provenAt[level] = (double(2 << level) - 0.5) * texel - 4.0 * ef.eps;
+            provenBefore[level] = level == 0 ? -double(kInfF) : provenAt[level - 1];
         }
     }
 
@@ -1320,9 +1381,8 @@ struct RelaxedTileSearch {
                                const OffsetBounds& ob, double lam, double apexD,
                                double best) const {
         if (!(lam > 0)) return false;
-        const int W = hf.width, H = hf.height;
+        const int W = hf.width;
         const double m = b * double(ob.invD);
-        const double texel = std::min(1.0 / double(W), 1.0 / double(H));
         // The travel the exit bound needs to prune the pair, in real numbers: it only
         // picks the first window worth the bound (and skips pairs no window can prune);
         // the bound itself is evaluated as always.
@@ -1331,18 +1391,15 @@ struct RelaxedTileSearch {
             (best * (apexD - b + ef.eta) - (double(ob.dist) - ef.eps) * c) /
             (c + best * m) * (1.0 - 0x1p-30);
         // The travel a clear window of (2 << level) texels proves.
-        const auto proven = [&](size_t level) {
-            return (double(2 << level) - 0.5) * texel - 4.0 * ef.eps;
-        };
-        const size_t levels = dw.max.size();
+        const auto proven = [&](size_t level) { return provenAt[level]; };
+        const size_t levels = AheadCodes::kLevels;
         size_t first = 0;
         while (first < levels && proven(first) < need) ++first;
         if (first == levels) return false;
+        const AheadCodes& ahead = dw.ahead[(dx < 0 ? 1u : 0u) | (dy < 0 ? 2u : 0u)]
+                                          [size_t(y) * size_t(W) + size_t(x)];
         const auto deepestAhead = [&](size_t level) {
-            const int k = 2 << level;
-            const int x0 = dx >= 0 ? x : WrapFast(x - (k - 1), W);
-            const int y0 = dy >= 0 ? y : WrapFast(y - (k - 1), H);
-            return double(dw.max[level][size_t(y0) * size_t(W) + size_t(x0)]);
+            return AheadDepth(ahead.code[level]);
         };
         // That window first, against the largest z the windows before it can prove: one
         // load rejects most pairs.
@@ -1433,9 +1490,18 @@ struct RelaxedTileSearch {
         if (ef.usable) {
             if (TryAhead()) {
                 const size_t u = size_t(l);
-                const bool pruned = AheadPrunes(dxo, dyo, col, row, double(b), ob,
-                                                std::max(lp - 2.0 * ef.eps, stepLo),
-                                                dApex[u], double(tb.lane[u].best));
+                const double lam = std::max(lp - 2.0 * ef.eps, stepLo);
+                const double best = double(tb.lane[u].best);
+#if RS_HAVE_CONE_SEARCH_AVX
+                const bool pruned = batch
+                                        ? AheadPrunesAvx512(dxo, dyo, col, row, double(b),
+                                                            ob, lam, dApex[u], best)
+                                        : AheadPrunes(dxo, dyo, col, row, double(b), ob,
+                                                      lam, dApex[u], best);
+#else
+                const bool pruned =
+                    AheadPrunes(dxo, dyo, col, row, double(b), ob, lam, dApex[u], best);
+#endif
                 ahead.Count(pruned);
                 if (pruned) return;
             }
@@ -1456,6 +1522,43 @@ struct RelaxedTileSearch {
 
 #if RS_HAVE_CONE_SEARCH_AVX
     RS_AVX512_WARNINGS_OFF
+    /// AheadPrunes with AVX-512: the pair's seven windows at once (one load of their
+    /// codes), in its double arithmetic operation by operation. A level prunes where its
+    /// window and every smaller one are clear and the exit bound with the travel they
+    /// prove prunes the pair, as in AheadPrunes; every level is tried (AheadPrunes starts
+    /// at the first worth the bound: the levels before it rarely prune, and pruning more
+    /// pairs, each by a valid bound, never changes a minimum).
+    RS_TARGET_AVX512 bool AheadPrunesAvx512(int dx, int dy, int x, int y, double b,
+                                            const OffsetBounds& ob, double lam,
+                                            double apexD, double best) const {
+        if (!(lam > 0)) return false;
+        const AheadCodes& a = dw.ahead[(dx < 0 ? 1u : 0u) | (dy < 0 ? 2u : 0u)]
+                                      [size_t(y) * size_t(hf.width) + size_t(x)];
+        const __m512d deepest =
+            _mm512_mul_pd(_mm512_cvtepi32_pd(_mm256_cvtepu8_epi32(
+                              _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&a)))),
+                          _mm512_set1_pd(kAheadScale));
+        const __m512d bV = _mm512_set1_pd(b), lamV = _mm512_set1_pd(lam);
+        const __m512d m = _mm512_set1_pd(b * double(ob.invD));
+        // Clear: deepest <= b + lam * m - eta - 2^-40, lam the travel the levels before
+        // prove (std::max(lam, proven): the same value as max_pd here, no NaN).
+        const __m512d lamBefore =
+            _mm512_max_pd(lamV, _mm512_load_pd(provenBefore.data()));
+        const __m512d z =
+            _mm512_sub_pd(_mm512_sub_pd(_mm512_add_pd(bV, _mm512_mul_pd(lamBefore, m)),
+                                        _mm512_set1_pd(ef.eta)),
+                          _mm512_set1_pd(0x1p-40));
+        const unsigned clear = _mm512_cmp_pd_mask(deepest, z, _CMP_LE_OQ) & 0x7Fu;
+        const unsigned upTo = (1u << std::countr_one(clear)) - 1u;
+        if (!upTo) return false;
+        const __m512d lamAt = _mm512_max_pd(lamV, _mm512_load_pd(provenAt.data()));
+        const __mmask8 prunes = ExitBoundPrunes8(
+            ef, _mm512_set1_pd(double(ob.dist)), _mm512_set1_pd(double(ob.invD)), bV,
+            _mm512_add_pd(lamAt, _mm512_set1_pd(2.0 * ef.eps)), _mm512_set1_pd(apexD),
+            _mm512_set1_pd(best), _mm512_setzero_pd());
+        return (prunes & upTo) != 0;
+    }
+
     /// GroupLanes with AVX-512, all lanes at once in its double arithmetic operation by
     /// operation (the same lanes are kept).
     RS_TARGET_AVX512 LaneBits GroupLanesAvx512(const LaneGroup& q, LaneBits lanes,
@@ -1669,14 +1772,14 @@ struct RelaxedTileSearch {
             if (double(sg.minDistLo) >= Reach()) break;  // sorted by distance
             int sx0 = 0, sy0 = 0;
             const LaneBits ls =
-                WindowLanes(sg, active, dw.min32, dw.max[4], ef.Lwin32, sx0, sy0);
+                WindowLanes(sg, active, dw.min32, dw.max32, ef.Lwin32, sx0, sy0);
             if (!ls) continue;
             for (int tileIndex : super.tiles) {
                 const LaneGroup& tg = lw.tiles[size_t(tileIndex)];
                 if (double(tg.minDistLo) >= Reach()) break;  // sorted by distance
                 int wx = 0, wy = 0;
                 const LaneBits lt =
-                    WindowLanes(tg, ls, dw.min8, dw.max[2], ef.Lwin, wx, wy);
+                    WindowLanes(tg, ls, dw.min8, dw.max8, ef.Lwin, wx, wy);
                 if (!lt) continue;
                 const int tx = tileIndex % lw.ntx, ty = tileIndex / lw.ntx;
                 for (int k = 0; k < 4; ++k) {
@@ -1686,7 +1789,7 @@ struct RelaxedTileSearch {
                     if (!(qg.minDistLo < kInfF)) continue;
                     int qx = 0, qy = 0;
                     const LaneBits lq =
-                        WindowLanes(qg, lt, dw.min4, dw.max[1], ef.Lwin4, qx, qy);
+                        WindowLanes(qg, lt, dw.min4, dw.max4, ef.Lwin4, qx, qy);
                     if (!lq) continue;
 #if RS_HAVE_CONE_SEARCH_AVX
                     if (avx512) {
@@ -1712,9 +1815,9 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
     // Depth maxima over 4x4, 8x8 and 32x32 windows (the exit field's build and the
     // group bounds both use them; the others, for AheadPrunes, after the exit field).
     DepthWindows dw;
-    dw.max[1] = WindowMaxima(hf.depth, W, H, 4);
-    dw.max[2] = WindowMaxima(dw.max[1], W, H, 2, 4);
-    dw.max[4] = WindowMaxima(dw.max[2], W, H, kSuperTile, kTile);
+    dw.max4 = WindowMaxima(hf.depth, W, H, 4);
+    dw.max8 = WindowMaxima(dw.max4, W, H, 2, 4);
+    dw.max32 = WindowMaxima(dw.max8, W, H, kSuperTile, kTile);
     // The exit field before the offsets and the other windows: its build's scratch is
     // freed before they are made (peak memory at 2048²).
     const float inv = PowerOfTwoInverse(p.searchSteps);
@@ -1722,7 +1825,7 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
     // uses it (RS_CONE_SEARCH_ISA forces a unit; the tests compare them).
     const bool avx512 = kAvx512Search && std::string_view(ConeSearchIsa()) == "avx512";
     const ExitField ef =
-        BuildExitField(hf, p.searchSteps, inv, exitField, dw.max[2], dw.max[4], avx512);
+        BuildExitField(hf, p.searchSteps, inv, exitField, dw.max8, dw.max32, avx512);
     {
         SearchWindows sw;  // depth minima over 8x8 and 32x32 windows (the tiled search's)
         MakeSearchWindows(hf, sw);
@@ -1730,10 +1833,7 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
         dw.min32 = std::move(sw.win32);
     }
     dw.min4 = WindowMinima(hf.depth, W, H, 1, 4);
-    dw.max[0] = WindowMaxima(hf.depth, W, H, 2);
-    dw.max[3] = WindowMaxima(dw.max[2], W, H, 2, 8);
-    dw.max[5] = WindowMaxima(dw.max[4], W, H, 2, 32);
-    dw.max[6] = WindowMaxima(dw.max[5], W, H, 2, 64);
+    MakeWindowsAhead(dw, hf.depth, W, H);
     dw.shallow.assign(hf.depth.size(), 0.0f);
     for (size_t t = 0; t < dw.shallow.size(); ++t) {
         const double b = double(hf.depth[t]);
