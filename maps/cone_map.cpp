@@ -314,20 +314,20 @@ void WindowReduceInto(const std::vector<T>& v, int W, int H, int C, int k, int s
         tbb::parallel_for(
             tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
                 for (int j = r.begin(); j < r.end(); ++j)
-                    for (int i = 0; i < W; ++i)
-                        for (size_t c = 0; c < Cs; ++c) {
-                            T m = in[(size_t(j) * size_t(W) + size_t(i)) * Cs + c];
-                            const int n = alongX ? W : H, p0 = alongX ? i : j;
-                            for (int a = 1, p = p0 + step; a < k; ++a, p += step) {
-                                if (p >= n)
-                                    p = p - n < n ? p - n
-                                                  : Wrap(p, n);  // no modulo mostly
-                                const int x = alongX ? p : i, y = alongX ? j : p;
-                                m = op(m,
-                                       in[(size_t(y) * size_t(W) + size_t(x)) * Cs + c]);
-                            }
-                            out[(size_t(j) * size_t(W) + size_t(i)) * Cs + c] = m;
+                    for (int i = 0; i < W; ++i) {
+                        // The texel's C channels side by side (one vector where C = 16).
+                        T* m = &out[(size_t(j) * size_t(W) + size_t(i)) * Cs];
+                        const T* first = &in[(size_t(j) * size_t(W) + size_t(i)) * Cs];
+                        for (size_t c = 0; c < Cs; ++c) m[c] = first[c];
+                        const int n = alongX ? W : H, p0 = alongX ? i : j;
+                        for (int a = 1, p = p0 + step; a < k; ++a, p += step) {
+                            if (p >= n)
+                                p = p - n < n ? p - n : Wrap(p, n);  // no modulo mostly
+                            const int x = alongX ? p : i, y = alongX ? j : p;
+                            const T* next = &in[(size_t(y) * size_t(W) + size_t(x)) * Cs];
+                            for (size_t c = 0; c < Cs; ++c) m[c] = op(m[c], next[c]);
                         }
+                    }
             });
     };
     rows.resize(v.size());
