@@ -309,6 +309,7 @@ struct ExitTile {
     int begin, ox, oy;
     float minDist;
     SectorBits mask;
+    float openAbove;  ///< SetOpenBounds
 };
 
 /// The exit-field search window of radius (Rx, Ry) texels: its offsets (but (0, 0)) in
@@ -319,6 +320,7 @@ struct ExitSuper {
     int first, last, ox, oy;
     float minDist;
     SectorBits mask;
+    float openAbove;  ///< SetOpenBounds
 };
 struct ExitWindow {
     std::vector<ExitOffset> offs;
@@ -333,10 +335,10 @@ ExitWindow MakeExitWindow(int W, int H, int Rx, int Ry, double e) {
     constexpr int kSuper = kSuperTile * kTile;
     for (int sy = -Ry; sy <= Ry; sy += kSuper)
         for (int sx = -Rx; sx <= Rx; sx += kSuper) {
-            ExitSuper st{int(win.tiles.size()), 0, sx, sy, kInfF, 0};
+            ExitSuper st{int(win.tiles.size()), 0, sx, sy, kInfF, 0, kInfF};
             for (int oy = sy; oy < std::min(sy + kSuper, Ry + 1); oy += kTile)
                 for (int ox = sx; ox < std::min(sx + kSuper, Rx + 1); ox += kTile) {
-                    ExitTile t{int(offs.size()), ox, oy, kInfF, 0};
+                    ExitTile t{int(offs.size()), ox, oy, kInfF, 0, kInfF};
                     bool any = false;
                     offs.resize(offs.size() + kTile * kTile, ExitOffset{kInfF, 0});
                     win.sectorSlots.resize(offs.size() / (kTile * kTile) * kSectors, 0);
@@ -384,6 +386,20 @@ ExitWindow MakeExitWindow(int W, int H, int Rx, int Ry, double e) {
     return win;
 }
 
+/// The field is stored as codes (ExitCodes, EncodeDown): a cell at distance >= v lowers a
+/// sector's code only where its distance L is at least the next code's value above v's
+/// code. Sets each tile's and super-tile's `openAbove` to the largest float below that
+/// value for v = its minDist: only sectors with L > openAbove are worth scanning it for,
+/// and the codes come out the same as if every nearer cell were taken.
+void SetOpenBounds(ExitWindow& win, const std::array<float, 256>& decode) {
+    const auto openAbove = [&](float v) {
+        const int c = EncodeDown(decode, v);
+        return c >= 255 ? kInfF : std::nextafter(decode[size_t(c) + 1], 0.0f);
+    };
+    for (ExitTile& t : win.tiles) t.openAbove = openAbove(t.minDist);
+    for (ExitSuper& st : win.supers) st.openAbove = openAbove(st.minDist);
+}
+
 /// i mod n for any i; without a division for i in [-n, 2n) (the exit window wraps more
 /// than once only on maps smaller than it).
 inline int WrapFast(int i, int n) {
@@ -427,8 +443,10 @@ struct ScalarSectors {
 
 /// The exit field of texel (i, j) into L (ScalarSectors or VectorSectors): per sector,
 /// the distance to the nearest cell deeper than d (the march's z after its first step)
-/// in the window, `edge` when none is. max8, max32: depth maxima over the 8x8 and 32x32
-/// windows (tiles and super-tiles without a deeper cell are skipped).
+/// in the window, `edge` when none is; or a larger distance with the same code (tiles
+/// are scanned only for sectors open above their `openAbove`). max8, max32: depth maxima
+/// over the 8x8 and 32x32 windows (tiles and super-tiles without a deeper cell are
+/// skipped).
 template <class Sectors>
 inline void ExitScan(const DepthField& hf, const ExitWindow& win,
                      const std::vector<float>& max8, const std::vector<float>& max32,
@@ -436,15 +454,15 @@ inline void ExitScan(const DepthField& hf, const ExitWindow& win,
     const int W = hf.width, H = hf.height;
     float worst = edge;
     for (const ExitSuper& st : win.supers) {
-        if (st.minDist >= worst) break;
-        if (!L.Open(st.mask, st.minDist)) continue;
+        if (!(worst > st.openAbove)) break;  // sorted by distance
+        if (!L.Open(st.mask, st.openAbove)) continue;
         if (!(max32[size_t(WrapFast(j + st.oy, H)) * size_t(W) +
                     size_t(WrapFast(i + st.ox, W))] > d))
             continue;
         for (int x = st.first; x < st.last; ++x) {
             const ExitTile& t = win.tiles[size_t(x)];
-            if (t.minDist >= worst) break;  // sorted by distance
-            const SectorBits open = L.Open(t.mask, t.minDist);
+            if (!(worst > t.openAbove)) break;  // sorted by distance
+            const SectorBits open = L.Open(t.mask, t.openAbove);
             if (!open) continue;
             const int wy = WrapFast(j + t.oy, H), wx = WrapFast(i + t.ox, W);
             if (!(max8[size_t(wy) * size_t(W) + size_t(wx)] > d)) continue;
@@ -526,12 +544,32 @@ RS_TARGET_AVX512 __attribute__((flatten)) void ExitDistancesOfTexelAvx512(
 RS_AVX512_WARNINGS_ON
 #endif
 
+/// The exit field of texel (i, j) into L[0..kSectors) from every cell of the window, in
+/// no order and with no skipping: ExitScan's oracle.
+void ExitDistancesEveryCell(const DepthField& hf, const ExitWindow& win, int i, int j,
+                            float d, float edge, float* L) {
+    const int W = hf.width, H = hf.height;
+    std::fill(L, L + kSectors, edge);
+    for (const ExitTile& t : win.tiles)
+        for (int slot = 0; slot < kTile * kTile; ++slot) {
+            const ExitOffset& o = win.offs[size_t(t.begin + slot)];
+            const int x = WrapFast(i + t.ox + slot % kTile, W);
+            const int y = WrapFast(j + t.oy + slot / kTile, H);
+            if (o.mask && hf.depth[size_t(y) * size_t(W) + size_t(x)] > d)
+                LowerMasked(unsigned(o.mask), o.dist, L);
+        }
+}
+
+/// How BuildExitField takes a texel's distances: ExitScan (scalar or AVX-512), or every
+/// cell of the window (ExitDistancesEveryCell, the tests' oracle).
+enum class ExitBuild { Scan, ScanAvx512, EveryCell };
+
 /// The exit field (ExitField) of a map for `steps` steps; empty (usable = false) when
 /// its float argument does not hold or it is not wanted. max8, max32: the map's depth
 /// maxima over 8x8 and 32x32 windows.
 ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted,
                          const std::vector<float>& max8, const std::vector<float>& max32,
-                         [[maybe_unused]] bool avx512) {
+                         ExitBuild how) {
     ExitField f = MakeExitFieldSlack(hf, steps);
     f.usable = f.usable && wanted;
     if (!f.usable) return f;
@@ -541,13 +579,14 @@ ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted
     // edge.
     const int Rx = std::max(8, (W + 7) / 8), Ry = std::max(8, (H + 7) / 8);
     const double e = f.eps;
-    const ExitWindow win = MakeExitWindow(W, H, Rx, Ry, e);
+    ExitWindow win = MakeExitWindow(W, H, Rx, Ry, e);
     // Every cell outside the window is at least this far (its dilation included).
     const float edge = NonNegFloatAtMost(std::min((Rx + 0.5) / W, (Ry + 0.5) / H) - e);
     float dmax = hf.depth[0];
     for (float d : hf.depth) dmax = std::max(dmax, d);
     // Coded as each texel is done (a float field would take 64 bytes per texel).
     f.decode = ExitCodes(W, H, edge);
+    SetOpenBounds(win, f.decode);
     f.L.assign(N * kSectors, 255);
     tbb::parallel_for(
         tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
@@ -561,13 +600,17 @@ ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted
                     const float d = b + ListingStep(1.0f - b, steps, inv);
                     if (!(d < dmax))
                         continue;  // nothing is deeper: no cell can end a march
+                    if (how == ExitBuild::EveryCell) {
+                        ExitDistancesEveryCell(hf, win, i, j, d, edge, L);
+                    } else {
 #if RS_HAVE_CONE_SEARCH_AVX
-                    if (avx512)
-                        ExitDistancesOfTexelAvx512(hf, win, max8, max32, i, j, d, edge,
-                                                   L);
-                    else
+                        if (how == ExitBuild::ScanAvx512)
+                            ExitDistancesOfTexelAvx512(hf, win, max8, max32, i, j, d,
+                                                       edge, L);
+                        else
 #endif
-                        ExitDistancesOfTexel(hf, win, max8, max32, i, j, d, edge, L);
+                            ExitDistancesOfTexel(hf, win, max8, max32, i, j, d, edge, L);
+                    }
                     uint8_t* out = &f.L[(size_t(j) * size_t(W) + size_t(i)) * kSectors];
                     for (int k = 0; k < kSectors; ++k)
                         out[k] = EncodeDown(f.decode, L[k]);
@@ -1825,7 +1868,8 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
     // uses it (RS_CONE_SEARCH_ISA forces a unit; the tests compare them).
     const bool avx512 = kAvx512Search && std::string_view(ConeSearchIsa()) == "avx512";
     const ExitField ef =
-        BuildExitField(hf, p.searchSteps, inv, exitField, dw.max8, dw.max32, avx512);
+        BuildExitField(hf, p.searchSteps, inv, exitField, dw.max8, dw.max32,
+                       avx512 ? ExitBuild::ScanAvx512 : ExitBuild::Scan);
     {
         SearchWindows sw;  // depth minima over 8x8 and 32x32 windows (the tiled search's)
         MakeSearchWindows(hf, sw);
@@ -1897,6 +1941,20 @@ ConeMap RelaxedListingMap(const DepthField& hf, const ConeMapParams& p, bool bru
     else
         PrunedRelaxedMap(hf, p, g, dmin, exitField, aheadEveryPair, out);
     return std::move(out.m);
+}
+
+std::vector<uint8_t> RelaxedExitField(const DepthField& hf, int steps, bool scan) {
+    const int W = hf.width, H = hf.height;
+    const std::vector<float> max8 =
+        WindowMaxima(WindowMaxima(hf.depth, W, H, 4), W, H, 2, 4);
+    const std::vector<float> max32 = WindowMaxima(max8, W, H, kSuperTile, kTile);
+    const bool avx512 = kAvx512Search && std::string_view(ConeSearchIsa()) == "avx512";
+    const ExitBuild how = !scan    ? ExitBuild::EveryCell
+                          : avx512 ? ExitBuild::ScanAvx512
+                                   : ExitBuild::Scan;
+    ExitField f =
+        BuildExitField(hf, steps, PowerOfTwoInverse(steps), true, max8, max32, how);
+    return std::move(f.L);
 }
 
 }  // namespace reliefsim::detail

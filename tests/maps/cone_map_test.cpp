@@ -556,6 +556,60 @@ TEST(ConeMap, RelaxedSearchIsTheSameOnEveryInstructionSet) {
         unsetenv("RS_CONE_SEARCH_ISA");
 }
 
+TEST(ConeMap, RelaxedExitFieldScanEqualsEveryCell) {
+    // The exit field's scan visits super-tiles and tiles in order of distance and skips
+    // those whose depth maxima hold no deeper cell, and sectors whose code no cell of the
+    // tile can lower; taking every cell of the window, in no order, gives the same codes,
+    // scalar and AVX-512: float, 8-bit and random depths, zero depths, a plateau,
+    // non-square maps, maps larger than a super-tile's window and maps smaller than the
+    // window (wrapping more than once), steps that divide (37) and powers of two.
+    const char* old = std::getenv("RS_CONE_SEARCH_ISA");
+    const std::string saved = old ? old : "";
+    DepthField zeros = RandomField(28, 28, 21, false);
+    for (size_t t = 0; t < zeros.depth.size(); t += 7) zeros.depth[t] = 0.0f;
+    const std::vector<std::pair<DepthField, int>> cases = {
+        {RandomField(40, 36, 6, true), 128},
+        {RandomField(7, 5, 3, false), 128},
+        {MakeBuiltinMap("noise", 96, 80), 37},
+        {QuantizeToUnorm8(MakeBuiltinMap("shapes", 128, 128)), 128},
+        {MakeBuiltinMap("shapes", 200, 184), 128},
+        {zeros, 8},
+        {PlateauField(48), 128},
+    };
+    size_t compared = 0;
+    for (const auto& [hf, steps] : cases) {
+        const std::string what = hf.name + " " + std::to_string(hf.width) + "x" +
+                                 std::to_string(hf.height) + " steps " +
+                                 std::to_string(steps);
+        const std::vector<uint8_t> every = detail::RelaxedExitField(hf, steps, false);
+        ASSERT_EQ(every.size(), hf.depth.size() * 16) << what;
+        // Not a field of one value: distances were found inside the window.
+        size_t found = 0;
+        for (uint8_t c : every) found += c > 0 && c < 254 ? 1 : 0;
+        EXPECT_GT(found, 0u) << what;
+        for (const char* isa : {"sse4.1", "avx512"}) {
+            setenv("RS_CONE_SEARCH_ISA", isa, 1);
+            if (std::string(detail::ConeSearchIsa()) != isa) continue;  // CPU lacks it
+            ++compared;
+            const std::vector<uint8_t> scan = detail::RelaxedExitField(hf, steps, true);
+            ASSERT_EQ(scan.size(), every.size()) << what;
+            size_t differ = 0, first = scan.size();
+            for (size_t t = 0; t < scan.size(); ++t)
+                if (scan[t] != every[t]) {
+                    ++differ;
+                    first = std::min(first, t);
+                }
+            EXPECT_EQ(differ, 0u) << what << " " << isa << ": first at texel "
+                                  << first / 16 << " sector " << first % 16;
+        }
+    }
+    EXPECT_GE(compared, cases.size());  // sse4.1 runs everywhere
+    if (old)
+        setenv("RS_CONE_SEARCH_ISA", saved.c_str(), 1);
+    else
+        unsetenv("RS_CONE_SEARCH_ISA");
+}
+
 TEST(ConeMap, StackedRelaxedChannelsWidenUpwards) {
     // Channel 0 (apex on the surface) is the relaxed map itself; a higher apex (channel
     // k) sees fewer destinations above it and a shorter height to every exit point, so
