@@ -367,7 +367,10 @@ TEST(ConeMap, RelaxedProvenTravelIsTight) {
                 const std::string what = "trench " + std::to_string(c.k) + " cells on" +
                                          (alongY ? " along y" : " along x") +
                                          (mirrored ? " mirrored" : "");
-                const auto [si, sj] = texel(src);
+                // Named, not structured bindings: C++20 lets a lambda capture those, but
+                // clang 14 does not.
+                const std::pair<int, int> st = texel(src);
+                const int si = st.first, sj = st.second;
                 const auto ratio = [&](int d2, float b2, int dx) {
                     const auto [ox, oy] = offset(dx);
                     return detail::RelaxedPairRatio(ribbon(d2, b2), si, sj, ox, oy, steps,
@@ -457,7 +460,7 @@ TEST(ConeMap, StackedNormalIsNzOfEachStackedCone) {
     ASSERT_EQ(normals.values.size(), ratios.values.size());
     size_t unbounded = 0;
     for (size_t i = 0; i < ratios.values.size(); ++i) {
-        const double r = ratios.values[i], n = normals.values[i];
+        const double r = double(ratios.values[i]), n = double(normals.values[i]);
         if (r >= double(kConeRatioCap)) {
             EXPECT_EQ(n, 1.0) << i;
             ++unbounded;
@@ -707,7 +710,7 @@ void ExpectConservative(const DepthField& hf, const ConeMap& m) {
     const int W = hf.width, H = hf.height;
     for (int j = 0; j < H; ++j)
         for (int i = 0; i < W; ++i) {
-            const long double r = m.At(i, j);
+            const auto r = static_cast<long double>(m.At(i, j));
             for (int y = 0; y < H; ++y)
                 for (int x = 0; x < W; ++x) {
                     const float db = hf.At(x, y), dt = hf.At(i, j);
@@ -717,7 +720,9 @@ void ExpectConservative(const DepthField& hf, const ConeMap& m) {
                     const long double dist =
                         std::sqrt((long double)(dx)*dx / ((long double)W * W) +
                                   (long double)(dy)*dy / ((long double)H * H));
-                    ASSERT_LE(r * ((long double)dt - db), dist)
+                    ASSERT_LE(
+                        r * (static_cast<long double>(dt) - static_cast<long double>(db)),
+                        dist)
                         << "texel " << i << "," << j << " blocker " << x << "," << y
                         << " r " << double(r) << " dt " << dt << " db " << db;
                 }
