@@ -1036,6 +1036,18 @@ RS_TARGET_AVX512 inline __mmask8 ExitBoundPrunes8(const ExitField& f, __m512d dL
         _mm512_mul_pd(best, den), _CMP_GE_OQ);
     return __mmask8(moves & (below | far));
 }
+/// The distance bound for 16 lanes (two halves of 8 in double): distLo >= best * (apex -
+/// b) prunes, operation by operation as the scalar test.
+RS_TARGET_AVX512 inline __mmask16 DistancePrunes16(__m512 distLo, __m512d bestL,
+                                                   __m512d bestH, __m512d apexL,
+                                                   __m512d apexH, __m512d bL,
+                                                   __m512d bH) {
+    return join(
+        _mm512_cmp_pd_mask(lo(distLo), _mm512_mul_pd(bestL, _mm512_sub_pd(apexL, bL)),
+                           _CMP_GE_OQ),
+        _mm512_cmp_pd_mask(hi(distLo), _mm512_mul_pd(bestH, _mm512_sub_pd(apexH, bH)),
+                           _CMP_GE_OQ));
+}
 RS_AVX512_WARNINGS_ON
 #endif
 
@@ -1358,6 +1370,27 @@ struct RelaxedTileSearch {
     /// greatest depth, which bounds the length of one march step: one step is at least
     /// |v| (1 - b) / (b steps) long, and (1 - b) / b only shrinks as b grows). The
     /// factor (1 - 2^-30) covers the double roundings of the step bound.
+    /// The exit bound's inputs for window q (GroupLanes): its least exit-field value over
+    /// the group's sectors (lam) and its one step's factor for its deepest depth (k);
+    /// `ignored` where every destination gives NaN. Zero without the exit field.
+    struct WindowExit {
+        bool ignored = false;
+        double lam = 0, k = 0;
+    };
+    WindowExit ExitOfWindow(const LaneGroup& q, size_t w, float wmax,
+                            const std::vector<uint8_t>& lwin) const {
+        WindowExit we;
+        if (!ef.usable) return we;
+        if (!(wmax > 0.0f)) {
+            we.ignored = true;
+            return we;
+        }
+        we.lam = double(MinOverSectors(ef, lwin, w, q.mask));
+        const double bmax = double(wmax);
+        we.k = (1.0 - bmax) / (bmax * double(steps)) * (1.0 - 0x1p-20) * (1.0 - 0x1p-30);
+        return we;
+    }
+
     LaneBits GroupLanes(const LaneGroup& q, LaneBits lanes, size_t w, float wmin,
                         float wmax, const std::vector<uint8_t>& lwin) const {
 #if RS_HAVE_CONE_SEARCH_AVX
@@ -1365,14 +1398,10 @@ struct RelaxedTileSearch {
 #endif
         LaneBits keep = 0;
         const double dmin = double(wmin);
-        double lam = 0, k = 0;
         const bool exit = ef.usable;
-        if (exit) {
-            if (!(wmax > 0.0f)) return 0;  // every destination gives NaN: ignored
-            lam = double(MinOverSectors(ef, lwin, w, q.mask));
-            const double bmax = double(wmax);
-            k = (1.0 - bmax) / (bmax * double(steps)) * (1.0 - 0x1p-20) * (1.0 - 0x1p-30);
-        }
+        const WindowExit we = ExitOfWindow(q, w, wmax, lwin);
+        if (we.ignored) return 0;
+        const double lam = we.lam, k = we.k;
         for (LaneBits m = lanes; m; m &= m - 1) {
             const int l = std::countr_zero(m);
             const size_t u = size_t(l);
@@ -1608,13 +1637,8 @@ struct RelaxedTileSearch {
                                                size_t w, float wmin, float wmax,
                                                const std::vector<uint8_t>& lwin) const {
         const bool exit = ef.usable;
-        double lam = 0, k = 0;
-        if (exit) {
-            if (!(wmax > 0.0f)) return 0;  // every destination gives NaN: ignored
-            lam = double(MinOverSectors(ef, lwin, w, q.mask));
-            const double bmax = double(wmax);
-            k = (1.0 - bmax) / (bmax * double(steps)) * (1.0 - 0x1p-20) * (1.0 - 0x1p-30);
-        }
+        const WindowExit we = ExitOfWindow(q, w, wmax, lwin);
+        if (we.ignored) return 0;
         __mmask16 keep =
             _mm512_mask_cmp_ps_mask(__mmask16(lanes), _mm512_set1_ps(wmin),
                                     _mm512_loadu_ps(apex.data()), _CMP_LT_OQ);
@@ -1624,17 +1648,12 @@ struct RelaxedTileSearch {
         const __m512d apexL = _mm512_loadu_pd(dApex.data()),
                       apexH = _mm512_loadu_pd(dApex.data() + 8);
         const __m512d dmin = _mm512_set1_pd(double(wmin));
-        const __m512 distLo = _mm512_loadu_ps(q.distLo.data());
-        keep &= __mmask16(~join(
-            _mm512_cmp_pd_mask(
-                lo(distLo), _mm512_mul_pd(bestL, _mm512_sub_pd(apexL, dmin)), _CMP_GE_OQ),
-            _mm512_cmp_pd_mask(hi(distLo),
-                               _mm512_mul_pd(bestH, _mm512_sub_pd(apexH, dmin)),
-                               _CMP_GE_OQ)));
+        keep &= __mmask16(~DistancePrunes16(_mm512_loadu_ps(q.distLo.data()), bestL,
+                                            bestH, apexL, apexH, dmin, dmin));
         if (!keep || !exit) return keep;
         const __m512 dLo = _mm512_loadu_ps(q.dLo.data()),
                      invD = _mm512_loadu_ps(q.invD.data());
-        const __m512d L = _mm512_set1_pd(lam), kk = _mm512_set1_pd(k),
+        const __m512d L = _mm512_set1_pd(we.lam), kk = _mm512_set1_pd(we.k),
                       slack = _mm512_set1_pd(0x1p-22);
         const __m512d dLoL = lo(dLo), dLoH = hi(dLo);
         keep &= __mmask16(
@@ -1696,14 +1715,8 @@ struct RelaxedTileSearch {
             const __m512d best = _mm512_set1_pd(double(tb.lane[u].best));
             const __m512d apexD = _mm512_set1_pd(dApex[u]);
             // The distance bound: distLo >= best * (apex - b) prunes.
-            const __m512 distLo = Rows4(&d.soa.distLo[o0], pitch);
-            keep &= __mmask16(
-                ~join(_mm512_cmp_pd_mask(lo(distLo),
-                                         _mm512_mul_pd(best, _mm512_sub_pd(apexD, bL)),
-                                         _CMP_GE_OQ),
-                      _mm512_cmp_pd_mask(hi(distLo),
-                                         _mm512_mul_pd(best, _mm512_sub_pd(apexD, bH)),
-                                         _CMP_GE_OQ)));
+            keep &= __mmask16(~DistancePrunes16(Rows4(&d.soa.distLo[o0], pitch), best,
+                                                best, apexD, apexD, bL, bH));
             if (!keep) continue;
             alignas(64) float lpOf[16];
             if (ef.usable) {
