@@ -716,13 +716,6 @@ OffsetBounds MakeOffsetBounds(const Geometry& g, int W, int H, int steps, int dx
     return ob;
 }
 
-/// The running minimum of one (texel, channel) search and the destination that set it.
-struct RelaxedBest {
-    float best = 1.0f;
-    int argDx = 0, argDy = 0;
-    bool found = false;
-};
-
 /// The windows ahead of a destination (AheadPrunes) in one line: the greatest depth of
 /// the 2^(k+1)-square window for k = 0..6 (2x2 to 128x128) that starts at the texel and
 /// extends in one quadrant, each as a code whose value (AheadDepth) is at least it.
@@ -979,10 +972,22 @@ LaneWindows MakeLaneWindows(const DenseOffsets& d) {
     return lw;
 }
 
-/// The running minima of one tile's lanes and their minimisers (offsets from the lane's
-/// texel).
+/// The running minima of one tile's lanes (one vector) and the destinations that set
+/// them (offsets from the lane's texel; `found`: one bit per lane that has one).
 struct TileBest {
-    std::array<RelaxedBest, kLanes> lane;
+    alignas(64) std::array<float, kLanes> best;
+    std::array<int, kLanes> argDx{}, argDy{};
+    LaneBits found = 0;
+    TileBest() { best.fill(1.0f); }
+    /// Lowers lane l's minimum to r, set by the destination at (dx, dy), if r is lower.
+    void Lower(size_t l, float r, int dx, int dy) {
+        if (best[l] > r) {
+            best[l] = r;
+            argDx[l] = dx;
+            argDy[l] = dy;
+            found |= LaneBits(1) << l;
+        }
+    }
 };
 
 #if RS_HAVE_CONE_SEARCH_AVX
@@ -1316,7 +1321,6 @@ struct RelaxedTileSearch {
     std::array<size_t, kLanes> laneDelta{};
     bool avx512 = false;  ///< quarters by SearchQuarterAvx512 (DenseOffsets as fields)
     MarchQueue marches;   ///< pairs SearchQuarterAvx512 kept (MarchBatchAvx512)
-    alignas(64) std::array<float, kLanes> bestOf{};  ///< tb.lane[l].best, for the vectors
     /// AheadPrunes' travel a clear window of each level proves, and (AheadPrunesAvx512)
     /// the one the levels before it prove (-inf for the first).
     alignas(64) std::array<double, 8> provenAt{}, provenBefore{};
@@ -1338,18 +1342,11 @@ struct RelaxedTileSearch {
 
     /// The listing's ratio of lane l's pair at offset (dx, dy); lowers its minimum.
     RS_INLINE void Consider(int l, int dx, int dy, float b, double clear = 0) {
-        RelaxedBest& rb = tb.lane[size_t(l)];
+        const size_t u = size_t(l);
         const float fdx = float(dx) / float(hf.width), fdy = float(dy) / float(hf.height);
-        const float r = ListingRatio(hf, sx[size_t(l)], sy[size_t(l)],
-                                     sx[size_t(l)] + fdx, sy[size_t(l)] + fdy, b, steps,
-                                     inv, apex[size_t(l)], rb.best, clear);
-        if (rb.best > r) {
-            rb.best = r;
-            bestOf[size_t(l)] = r;
-            rb.argDx = dx;
-            rb.argDy = dy;
-            rb.found = true;
-        }
+        const float r = ListingRatio(hf, sx[u], sy[u], sx[u] + fdx, sy[u] + fdy, b, steps,
+                                     inv, apex[u], tb.best[u], clear);
+        tb.Lower(u, r, dx, dy);
     }
 
     /// The largest best * (apex - dmin) over the active lanes: a window whose distLo is
@@ -1358,7 +1355,7 @@ struct RelaxedTileSearch {
         double r = 0;
         for (LaneBits m = active; m; m &= m - 1) {
             const int l = std::countr_zero(m);
-            r = std::max(r, double(tb.lane[size_t(l)].best) * reach[size_t(l)]);
+            r = std::max(r, double(tb.best[size_t(l)]) * reach[size_t(l)]);
         }
         return r;
     }
@@ -1406,7 +1403,7 @@ struct RelaxedTileSearch {
             const int l = std::countr_zero(m);
             const size_t u = size_t(l);
             if (!(wmin < apex[u])) continue;
-            const double best = double(tb.lane[u].best);
+            const double best = double(tb.best[u]);
             if (double(q.distLo[u]) >= best * (dApex[u] - dmin)) continue;
             if (exit) {
                 const double dLo = double(q.dLo[u]);
@@ -1533,7 +1530,7 @@ struct RelaxedTileSearch {
                     const size_t u = size_t(l);
                     const size_t o = oe - laneDelta[u];
                     if (!(b < apex[u])) continue;
-                    const double best = double(tb.lane[u].best);
+                    const double best = double(tb.best[u]);
                     const OffsetBounds& ob = d.at[o];
                     if (double(ob.distLo) >= best * (dApex[u] - db)) continue;
                     double lp = 0, stepLo = 0;
@@ -1563,7 +1560,7 @@ struct RelaxedTileSearch {
             if (TryAhead()) {
                 const size_t u = size_t(l);
                 const double lam = std::max(lp - 2.0 * ef.eps, stepLo);
-                const double best = double(tb.lane[u].best);
+                const double best = double(tb.best[u]);
 #if RS_HAVE_CONE_SEARCH_AVX
                 const bool pruned = batch
                                         ? AheadPrunesAvx512(dxo, dyo, col, row, double(b),
@@ -1643,7 +1640,7 @@ struct RelaxedTileSearch {
             _mm512_mask_cmp_ps_mask(__mmask16(lanes), _mm512_set1_ps(wmin),
                                     _mm512_loadu_ps(apex.data()), _CMP_LT_OQ);
         if (!keep) return 0;
-        const __m512 best = _mm512_load_ps(bestOf.data());
+        const __m512 best = _mm512_load_ps(tb.best.data());
         const __m512d bestL = lo(best), bestH = hi(best);
         const __m512d apexL = _mm512_loadu_pd(dApex.data()),
                       apexH = _mm512_loadu_pd(dApex.data() + 8);
@@ -1712,7 +1709,7 @@ struct RelaxedTileSearch {
                 positive & _mm512_cmp_ps_mask(b, _mm512_set1_ps(apex[u]), _CMP_LT_OQ);
             if (!keep) continue;
             const size_t o0 = base - laneDelta[u];  // the lane's offset to destination 0
-            const __m512d best = _mm512_set1_pd(double(tb.lane[u].best));
+            const __m512d best = _mm512_set1_pd(double(tb.best[u]));
             const __m512d apexD = _mm512_set1_pd(dApex[u]);
             // The distance bound: distLo >= best * (apex - b) prunes.
             keep &= __mmask16(~DistancePrunes16(Rows4(&d.soa.distLo[o0], pitch), best,
@@ -1760,8 +1757,8 @@ struct RelaxedTileSearch {
         marches.n = 0;
         MarchLanes group[2];
         const int n0 = std::min(n, kLanes);
-        group[0].Start(steps, inv, marches, 0, n0, sx, sy, apex, bestOf);
-        group[1].Start(steps, inv, marches, n0, n - n0, sx, sy, apex, bestOf);
+        group[0].Start(steps, inv, marches, 0, n0, sx, sy, apex, tb.best);
+        group[1].Start(steps, inv, marches, n0, n - n0, sx, sy, apex, tb.best);
         while (group[0].live | group[1].live) {
             if (group[0].live) group[0].Step(hf);
             if (group[1].live) group[1].Step(hf);
@@ -1769,17 +1766,8 @@ struct RelaxedTileSearch {
         alignas(64) float rs[2 * kLanes];
         group[0].Ratios(rs);
         group[1].Ratios(rs + kLanes);
-        for (int k = 0; k < n; ++k) {
-            const int l = marches.lane[k];
-            RelaxedBest& rb = tb.lane[size_t(l)];
-            if (rb.best > rs[k]) {
-                rb.best = rs[k];
-                bestOf[size_t(l)] = rs[k];
-                rb.argDx = marches.dx[k];
-                rb.argDy = marches.dy[k];
-                rb.found = true;
-            }
-        }
+        for (int k = 0; k < n; ++k)
+            tb.Lower(size_t(marches.lane[k]), rs[k], marches.dx[k], marches.dy[k]);
     }
     RS_AVX512_WARNINGS_ON
 #endif
@@ -1794,7 +1782,6 @@ struct RelaxedTileSearch {
         J = tj;
         active = 0;
         tb = TileBest{};
-        for (int l = 0; l < kLanes; ++l) bestOf[size_t(l)] = tb.lane[size_t(l)].best;
         for (int l = 0; l < kLanes; ++l) {
             const size_t u = size_t(l);
             const int i = I + l % kApexSide, j = J + l / kApexSide;
@@ -1815,9 +1802,10 @@ struct RelaxedTileSearch {
                 const int l = std::countr_zero(m);
                 const int lx = l % kApexSide, ly = l / kApexSide;
                 for (int px = kApexSide - 1; px >= 0; --px) {
-                    const RelaxedBest& pb = prev->lane[size_t(ly * kApexSide + px)];
-                    if (!pb.found) continue;
-                    const int dx = pb.argDx - (kApexSide + lx - px), dy = pb.argDy;
+                    const size_t p = size_t(ly * kApexSide + px);
+                    if (!(prev->found >> p & 1u)) continue;
+                    const int dx = prev->argDx[p] - (kApexSide + lx - px),
+                              dy = prev->argDy[p];
                     if ((dx == 0 && dy == 0) || dx < -d.hx || dx > d.hx) continue;
                     Consider(l, dx, dy,
                              hf.At(Wrap(I + lx + dx, W), Wrap(J + ly + dy, H)));
@@ -1916,8 +1904,7 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
                             I > 0 ? &prev : nullptr);
                         for (int l = 0; l < kLanes; ++l) {
                             const int i = I + l % kApexSide, j = J + l / kApexSide;
-                            if (i < W && j < H)
-                                out.Store(i, j, c, tb.lane[size_t(l)].best);
+                            if (i < W && j < H) out.Store(i, j, c, tb.best[size_t(l)]);
                         }
                         prev = tb;
                     }
