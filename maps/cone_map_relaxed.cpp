@@ -1324,6 +1324,11 @@ struct RelaxedTileSearch {
     /// AheadPrunes' travel a clear window of each level proves, and (AheadPrunesAvx512)
     /// the one the levels before it prove (-inf for the first).
     alignas(64) std::array<double, 8> provenAt{}, provenBefore{};
+    /// float(dx) / float(W) and float(dy) / float(H), the listing's destination offsets,
+    /// for |dx|, |dy| <= offsetPad (OffsetU, OffsetV): the same floats without a
+    /// division.
+    int offsetPad = 0;
+    std::vector<float> uOf, vOf;
     TileBest tb;
 
     RelaxedTileSearch(const DepthField& hf, const DenseOffsets& d, const LaneWindows& lw,
@@ -1333,6 +1338,12 @@ struct RelaxedTileSearch {
         for (int l = 0; l < kLanes; ++l)
             laneDelta[size_t(l)] =
                 size_t(l / kApexSide) * size_t(d.pitch) + size_t(l % kApexSide);
+        // Every offset of the dense table, from any lane of the tile.
+        offsetPad = std::max(d.hx, d.hy) + DenseOffsets::kPadHi + kApexSide;
+        for (int t = -offsetPad; t <= offsetPad; ++t) {
+            uOf.push_back(float(t) / float(hf.width));
+            vOf.push_back(float(t) / float(hf.height));
+        }
         const double texel = std::min(1.0 / double(hf.width), 1.0 / double(hf.height));
         for (size_t level = 0; level < provenAt.size(); ++level) {
             provenAt[level] = (double(2 << level) - 0.5) * texel - 4.0 * ef.eps;
@@ -1340,10 +1351,19 @@ struct RelaxedTileSearch {
         }
     }
 
+    float OffsetU(int dx) const {
+        RS_DCHECK(dx >= -offsetPad && dx <= offsetPad);
+        return uOf[size_t(dx + offsetPad)];
+    }
+    float OffsetV(int dy) const {
+        RS_DCHECK(dy >= -offsetPad && dy <= offsetPad);
+        return vOf[size_t(dy + offsetPad)];
+    }
+
     /// The listing's ratio of lane l's pair at offset (dx, dy); lowers its minimum.
     RS_INLINE void Consider(int l, int dx, int dy, float b, double clear = 0) {
         const size_t u = size_t(l);
-        const float fdx = float(dx) / float(hf.width), fdy = float(dy) / float(hf.height);
+        const float fdx = OffsetU(dx), fdy = OffsetV(dy);
         const float r = ListingRatio(hf, sx[u], sy[u], sx[u] + fdx, sy[u] + fdy, b, steps,
                                      inv, apex[u], tb.best[u], clear);
         tb.Lower(u, r, dx, dy);
@@ -1579,8 +1599,8 @@ struct RelaxedTileSearch {
 #if RS_HAVE_CONE_SEARCH_AVX
         if (batch) {
             const size_t u = size_t(l);
-            marches.Add(l, dxo, dyo, sx[u] + float(dxo) / float(hf.width),
-                        sy[u] + float(dyo) / float(hf.height), b, clear);
+            marches.Add(l, dxo, dyo, sx[u] + OffsetU(dxo), sy[u] + OffsetV(dyo), b,
+                        clear);
             if (marches.n == MarchQueue::kSize) MarchBatchAvx512();
             return;
         }
