@@ -751,34 +751,50 @@ struct DepthWindows {
     std::vector<float> shallow;
 };
 
-/// DepthWindows::ahead, from the groups' maxima (4x4, 8x8, 32x32) and the other levels',
-/// made one at a time (peak memory at 2048²).
+/// DepthWindows::ahead, from the groups' maxima (4x4, 8x8, 32x32) and the other levels':
+/// each level's maxima coded once (AheadCode), then every record written whole.
 void MakeWindowsAhead(DepthWindows& dw, const std::vector<float>& depth, int W, int H) {
     const size_t n = size_t(W) * size_t(H);
-    for (auto& ahead : dw.ahead) ahead.assign(n, AheadCodes{});
-    // Level k: the (2 << k)-square windows; max holds their maxima where they start.
-    const auto fill = [&](size_t level, const std::vector<float>& max) {
-        const int k = 2 << level;
+    std::array<std::vector<uint8_t>, AheadCodes::kLevels> codes;
+    const auto code = [&](size_t level, const std::vector<float>& max) {
+        codes[level].resize(n);
+        tbb::parallel_for(tbb::blocked_range<size_t>(0, n),
+                          [&](const tbb::blocked_range<size_t>& r) {
+                              for (size_t t = r.begin(); t < r.end(); ++t)
+                                  codes[level][t] = AheadCode(max[t]);
+                          });
+    };
+    code(0, WindowMaxima(depth, W, H, 2));
+    code(1, dw.max4);
+    code(2, dw.max8);
+    code(3, WindowMaxima(dw.max8, W, H, 2, 8));
+    code(4, dw.max32);
+    {
+        const std::vector<float> max64 = WindowMaxima(dw.max32, W, H, 2, 32);
+        code(5, max64);
+        code(6, WindowMaxima(max64, W, H, 2, 64));
+    }
+    for (size_t q = 0; q < 4; ++q) {
+        auto& ahead = dw.ahead[q];
+        ahead.resize(n);
         tbb::parallel_for(
             tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& r) {
                 for (int y = r.begin(); y < r.end(); ++y)
-                    for (int x = 0; x < W; ++x)
-                        for (size_t q = 0; q < 4; ++q) {
+                    for (int x = 0; x < W; ++x) {
+                        AheadCodes a;
+                        for (size_t level = 0; level < AheadCodes::kLevels; ++level) {
+                            // The (2 << level)-square window, towards -x and -y where q
+                            // says.
+                            const int k = 2 << level;
                             const int x0 = (q & 1) ? WrapFast(x - (k - 1), W) : x;
                             const int y0 = (q & 2) ? WrapFast(y - (k - 1), H) : y;
-                            dw.ahead[q][size_t(y) * size_t(W) + size_t(x)].code[level] =
-                                AheadCode(max[size_t(y0) * size_t(W) + size_t(x0)]);
+                            a.code[level] =
+                                codes[level][size_t(y0) * size_t(W) + size_t(x0)];
                         }
+                        ahead[size_t(y) * size_t(W) + size_t(x)] = a;
+                    }
             });
-    };
-    fill(0, WindowMaxima(depth, W, H, 2));
-    fill(1, dw.max4);
-    fill(2, dw.max8);
-    fill(3, WindowMaxima(dw.max8, W, H, 2, 8));
-    fill(4, dw.max32);
-    std::vector<float> max64 = WindowMaxima(dw.max32, W, H, 2, 32);
-    fill(5, max64);
-    fill(6, WindowMaxima(max64, W, H, 2, 64));
+    }
 }
 
 /// The apex-tile search: the 4x4 source texels of a tile (its lanes) searched together,
