@@ -724,9 +724,9 @@ struct alignas(8) AheadCodes {
     std::array<uint8_t, 8> code{0, 0, 0, 0, 0, 0, 0, 255};  // the last one unused
 };
 
-/// The value of an AheadCodes code: code / 255, in double (255: 1, the deepest depth).
-constexpr double kAheadScale = 1.0 / 255.0;
-inline double AheadDepth(uint8_t c) { return double(c) * kAheadScale; }
+/// The value of an AheadCodes code: the depth of that 8-bit code (Unorm8ToFloat, 255: 1,
+/// the deepest depth), so that the codes of an 8-bit map's depths are exact.
+inline double AheadDepth(uint8_t c) { return double(Unorm8ToFloat(c)); }
 
 /// The least code whose value is at least the depth d, which lies in [0, 1] (255 for
 /// NaN).
@@ -1639,10 +1639,11 @@ struct RelaxedTileSearch {
         if (!(lam > 0)) return false;
         const AheadCodes& a = dw.ahead[(dx < 0 ? 1u : 0u) | (dy < 0 ? 2u : 0u)]
                                       [size_t(y) * size_t(hf.width) + size_t(x)];
-        const __m512d deepest =
-            _mm512_mul_pd(_mm512_cvtepi32_pd(_mm256_cvtepu8_epi32(
+        // AheadDepth: Unorm8ToFloat's float product, then widened.
+        const __m512d deepest = _mm512_cvtps_pd(
+            _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(
                               _mm_loadl_epi64(reinterpret_cast<const __m128i*>(&a)))),
-                          _mm512_set1_pd(kAheadScale));
+                          _mm256_set1_ps(float(1.0 / 255.0))));
         const __m512d bV = _mm512_set1_pd(b), lamV = _mm512_set1_pd(lam);
         const __m512d m = _mm512_set1_pd(b * double(ob.invD));
         // Clear: deepest <= b + lam * m - eta - 2^-40, lam the travel the levels before
