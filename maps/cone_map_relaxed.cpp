@@ -723,6 +723,7 @@ struct alignas(8) AheadCodes {
     static constexpr size_t kLevels = 7;
     std::array<uint8_t, 8> code{0, 0, 0, 0, 0, 0, 0, 255};  // the last one unused
 };
+static_assert(sizeof(AheadCodes) == 8, "AheadPrunesAvx512 loads a record as 8 bytes");
 
 /// The value of an AheadCodes code: the depth of that 8-bit code (Unorm8ToFloat, 255: 1,
 /// the deepest depth), so that the codes of an 8-bit map's depths are exact.
@@ -1396,13 +1397,6 @@ struct RelaxedTileSearch {
         return r;
     }
 
-    /// The lanes of `lanes` for which window q may hold a pair that lowers the lane's
-    /// minimum. A lane is pruned when no destination lies above its apex in the window
-    /// (least depth wmin at window index w), by the distance bound, or by the exit bound
-    /// (lwin: the exit field's minima over windows of q's size; wmax: the window's
-    /// greatest depth, which bounds the length of one march step: one step is at least
-    /// |v| (1 - b) / (b steps) long, and (1 - b) / b only shrinks as b grows). The
-    /// factor (1 - 2^-30) covers the double roundings of the step bound.
     /// The exit bound's inputs for window q (GroupLanes): its least exit-field value over
     /// the group's sectors (lam) and its one step's factor for its deepest depth (k);
     /// `ignored` where every destination gives NaN. Zero without the exit field.
@@ -1424,6 +1418,13 @@ struct RelaxedTileSearch {
         return we;
     }
 
+    /// The lanes of `lanes` for which window q may hold a pair that lowers the lane's
+    /// minimum. A lane is pruned when no destination lies above its apex in the window
+    /// (least depth wmin at window index w), by the distance bound, or by the exit bound
+    /// (lwin: the exit field's minima over windows of q's size; wmax: the window's
+    /// greatest depth, which bounds the length of one march step: one step is at least
+    /// |v| (1 - b) / (b steps) long, and (1 - b) / b only shrinks as b grows). The
+    /// factor (1 - 2^-30) covers the double roundings of the step bound.
     LaneBits GroupLanes(const LaneGroup& q, LaneBits lanes, size_t w, float wmin,
                         float wmax, const std::vector<uint8_t>& lwin) const {
 #if RS_HAVE_CONE_SEARCH_AVX
