@@ -426,7 +426,6 @@ struct ScalarSectors {
         for (int b = 0; b < kTile; ++b) bits |= unsigned(row[b] > d) << b;
         return bits;
     }
-    /// Lowers the sectors of `mask` to v; true when one was above it.
     /// Lowers the sectors of each cell (bit s of `cells`: offs[s]) to its distance; true
     /// when one was above it.
     bool LowerCells(uint64_t cells, const ExitOffset* offs) {
@@ -750,6 +749,10 @@ struct DepthWindows {
     /// towards -y), rounded up (AheadCodes): a pair's windows are one load of 8 bytes.
     std::array<std::vector<AheadCodes>, 4> ahead;
     std::vector<float> shallow;
+    /// The windows ahead of texel t for a march at offset (dx, dy).
+    const AheadCodes& Ahead(int dx, int dy, size_t t) const {
+        return ahead[(dx < 0 ? 1u : 0u) | (dy < 0 ? 2u : 0u)][t];
+    }
 };
 
 /// DepthWindows::ahead, from the groups' maxima (4x4, 8x8, 32x32) and the other levels':
@@ -1502,8 +1505,7 @@ struct RelaxedTileSearch {
         size_t first = 0;
         while (first < levels && proven(first) < need) ++first;
         if (first == levels) return false;
-        const AheadCodes& ahead = dw.ahead[(dx < 0 ? 1u : 0u) | (dy < 0 ? 2u : 0u)]
-                                          [size_t(y) * size_t(W) + size_t(x)];
+        const AheadCodes& ahead = dw.Ahead(dx, dy, size_t(y) * size_t(W) + size_t(x));
         const auto deepestAhead = [&](size_t level) {
             return AheadDepth(ahead.code[level]);
         };
@@ -1638,8 +1640,7 @@ struct RelaxedTileSearch {
                                             const OffsetBounds& ob, double lam,
                                             double apexD, double best) const {
         if (!(lam > 0)) return false;
-        const AheadCodes& a = dw.ahead[(dx < 0 ? 1u : 0u) | (dy < 0 ? 2u : 0u)]
-                                      [size_t(y) * size_t(hf.width) + size_t(x)];
+        const AheadCodes& a = dw.Ahead(dx, dy, size_t(y) * size_t(hf.width) + size_t(x));
         // AheadDepth: Unorm8ToFloat's float product, then widened.
         const __m512d deepest = _mm512_cvtps_pd(
             _mm256_mul_ps(_mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(
