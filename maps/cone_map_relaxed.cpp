@@ -300,7 +300,7 @@ SectorBits RectSectorMask(double x0, double x1, double y0, double y1) {
 /// The exit-field search window: offsets in [-R, R]^2 (unwrapped, texel units) in 8x8
 /// tiles sorted by their smallest dilated distance.
 struct ExitOffset {
-    float dist;  ///< uv distance from the centre to the eps-dilated cell, rounded down
+    float code;  ///< the code of `dist` (SetCodes), as a float: what ExitScan takes
     SectorBits mask;
 };
 /// An 8x8 tile of the window: offsets[begin + 8 * ly + lx] is (ox + lx, oy + ly) (the
@@ -309,7 +309,7 @@ struct ExitTile {
     int begin, ox, oy;
     float minDist;
     SectorBits mask;
-    float openAbove;  ///< SetOpenBounds
+    float minCode;  ///< the code of minDist (SetCodes)
 };
 
 /// The exit-field search window of radius (Rx, Ry) texels: its offsets (but (0, 0)) in
@@ -320,10 +320,13 @@ struct ExitSuper {
     int first, last, ox, oy;
     float minDist;
     SectorBits mask;
-    float openAbove;  ///< SetOpenBounds
+    float minCode;  ///< the code of minDist (SetCodes)
 };
 struct ExitWindow {
     std::vector<ExitOffset> offs;
+    /// Per slot of `offs`: the uv distance from the centre to the eps-dilated cell,
+    /// rounded down (+inf for empty slots).
+    std::vector<float> dist;
     /// Per tile (block begin / 64) and sector: the slots whose mask holds the sector.
     std::vector<uint64_t> sectorSlots;
     std::vector<ExitTile> tiles;
@@ -335,12 +338,13 @@ ExitWindow MakeExitWindow(int W, int H, int Rx, int Ry, double e) {
     constexpr int kSuper = kSuperTile * kTile;
     for (int sy = -Ry; sy <= Ry; sy += kSuper)
         for (int sx = -Rx; sx <= Rx; sx += kSuper) {
-            ExitSuper st{int(win.tiles.size()), 0, sx, sy, kInfF, 0, kInfF};
+            ExitSuper st{int(win.tiles.size()), 0, sx, sy, kInfF, 0, 255.0f};
             for (int oy = sy; oy < std::min(sy + kSuper, Ry + 1); oy += kTile)
                 for (int ox = sx; ox < std::min(sx + kSuper, Rx + 1); ox += kTile) {
-                    ExitTile t{int(offs.size()), ox, oy, kInfF, 0, kInfF};
+                    ExitTile t{int(offs.size()), ox, oy, kInfF, 0, 255.0f};
                     bool any = false;
-                    offs.resize(offs.size() + kTile * kTile, ExitOffset{kInfF, 0});
+                    offs.resize(offs.size() + kTile * kTile, ExitOffset{255.0f, 0});
+                    win.dist.resize(offs.size(), kInfF);
                     win.sectorSlots.resize(offs.size() / (kTile * kTile) * kSectors, 0);
                     uint64_t* slotsOf =
                         &win.sectorSlots[win.sectorSlots.size() - kSectors];
@@ -351,20 +355,21 @@ ExitWindow MakeExitWindow(int W, int H, int Rx, int Ry, double e) {
                             const double y0 = (dy - 0.5) / H - e, y1 = (dy + 0.5) / H + e;
                             const double ax = std::max({0.0, x0, -x1}),
                                          ay = std::max({0.0, y0, -y1});
-                            const ExitOffset o{
-                                NonNegFloatAtMost(std::sqrt(ax * ax + ay * ay) *
-                                                  (1 - 1e-12)),
-                                RectSectorMask(x0, x1, y0, y1)};
+                            const float dist = NonNegFloatAtMost(
+                                std::sqrt(ax * ax + ay * ay) * (1 - 1e-12));
+                            const ExitOffset o{255.0f, RectSectorMask(x0, x1, y0, y1)};
                             const int slot = (dy - oy) * kTile + (dx - ox);
                             offs[size_t(t.begin + slot)] = o;
+                            win.dist[size_t(t.begin + slot)] = dist;
                             any = true;
                             for (unsigned m = o.mask; m; m &= m - 1)
                                 slotsOf[std::countr_zero(m)] |= uint64_t(1) << slot;
-                            t.minDist = std::min(t.minDist, o.dist);
+                            t.minDist = std::min(t.minDist, dist);
                             t.mask |= o.mask;
                         }
                     if (!any) {
                         offs.resize(size_t(t.begin));
+                        win.dist.resize(size_t(t.begin));
                         win.sectorSlots.resize(win.sectorSlots.size() - kSectors);
                         continue;
                     }
@@ -386,18 +391,15 @@ ExitWindow MakeExitWindow(int W, int H, int Rx, int Ry, double e) {
     return win;
 }
 
-/// The field is stored as codes (ExitCodes, EncodeDown): a cell at distance >= v lowers a
-/// sector's code only where its distance L is at least the next code's value above v's
-/// code. Sets each tile's and super-tile's `openAbove` to the largest float below that
-/// value for v = its minDist: only sectors with L > openAbove are worth scanning it for,
-/// and the codes come out the same as if every nearer cell were taken.
-void SetOpenBounds(ExitWindow& win, const std::array<float, 256>& decode) {
-    const auto openAbove = [&](float v) {
-        const int c = EncodeDown(decode, v);
-        return c >= 255 ? kInfF : std::nextafter(decode[size_t(c) + 1], 0.0f);
-    };
-    for (ExitTile& t : win.tiles) t.openAbove = openAbove(t.minDist);
-    for (ExitSuper& st : win.supers) st.openAbove = openAbove(st.minDist);
+/// The field is stored as codes (ExitCodes, EncodeDown), and EncodeDown is monotone: the
+/// code of a minimum of distances is the minimum of their codes. So ExitScan takes every
+/// distance as its code: each offset's, and each tile's and super-tile's least one; a
+/// (super-)tile can lower a sector's code only where that code is above the tile's.
+void SetCodes(ExitWindow& win, const std::array<float, 256>& decode) {
+    const auto code = [&](float v) { return float(EncodeDown(decode, v)); };
+    for (size_t s = 0; s < win.offs.size(); ++s) win.offs[s].code = code(win.dist[s]);
+    for (ExitTile& t : win.tiles) t.minCode = code(t.minDist);
+    for (ExitSuper& st : win.supers) st.minCode = code(st.minDist);
 }
 
 /// i mod n for any i; without a division for i in [-n, 2n) (the exit window wraps more
@@ -413,12 +415,12 @@ RS_INLINE SectorBits OpenSectors(const float* L, SectorBits mask, float v) {
     return SectorBits(open & mask);
 }
 
-/// A texel's 16 sector distances for ExitScan, as an array (the scalar build; the AVX-512
-/// one keeps them in one register, VectorSectors).
+/// A texel's 16 sector codes for ExitScan, as an array of floats (the scalar build; the
+/// AVX-512 one keeps them in one register, VectorSectors).
 struct ScalarSectors {
     float L[kSectors];
     explicit ScalarSectors(float edge) { std::fill(L, L + kSectors, edge); }
-    /// Sectors of `mask` whose distance is above v.
+    /// Sectors of `mask` whose code is above v.
     SectorBits Open(SectorBits mask, float v) const { return OpenSectors(L, mask, v); }
     /// The 8 cells row[0..8) deeper than d, one bit each.
     static unsigned Deeper(const float* row, float d) {
@@ -426,26 +428,27 @@ struct ScalarSectors {
         for (int b = 0; b < kTile; ++b) bits |= unsigned(row[b] > d) << b;
         return bits;
     }
-    /// Lowers the sectors of each cell (bit s of `cells`: offs[s]) to its distance; true
-    /// when one was above it.
+    /// Lowers the sectors of each cell (bit s of `cells`: offs[s]) to its code; true when
+    /// one was above it.
     bool LowerCells(uint64_t cells, const ExitOffset* offs) {
         bool changed = false;
         for (; cells; cells &= cells - 1) {
             const ExitOffset& off = offs[std::countr_zero(cells)];
-            changed |= LowerMasked(unsigned(off.mask), off.dist, L);
+            changed |= LowerMasked(unsigned(off.mask), off.code, L);
         }
         return changed;
     }
     float Worst() const { return *std::max_element(L, L + kSectors); }
-    void Store(float* out) const { std::copy(L, L + kSectors, out); }
+    void Store(uint8_t* out) const {
+        for (int k = 0; k < kSectors; ++k) out[k] = uint8_t(L[k]);
+    }
 };
 
 /// The exit field of texel (i, j) into L (ScalarSectors or VectorSectors): per sector,
-/// the distance to the nearest cell deeper than d (the march's z after its first step)
-/// in the window, `edge` when none is; or a larger distance with the same code (tiles
-/// are scanned only for sectors open above their `openAbove`). max8, max32: depth maxima
-/// over the 8x8 and 32x32 windows (tiles and super-tiles without a deeper cell are
-/// skipped).
+/// the code of the distance to the nearest cell deeper than d (the march's z after its
+/// first step) in the window, `edge` (the window edge's code) when none is (SetCodes).
+/// max8, max32: depth maxima over the 8x8 and 32x32 windows (tiles and super-tiles
+/// without a deeper cell are skipped).
 template <class Sectors>
 inline void ExitScan(const DepthField& hf, const ExitWindow& win,
                      const std::vector<float>& max8, const std::vector<float>& max32,
@@ -453,15 +456,15 @@ inline void ExitScan(const DepthField& hf, const ExitWindow& win,
     const int W = hf.width, H = hf.height;
     float worst = edge;
     for (const ExitSuper& st : win.supers) {
-        if (!(worst > st.openAbove)) break;  // sorted by distance
-        if (!L.Open(st.mask, st.openAbove)) continue;
+        if (!(worst > st.minCode)) break;  // sorted by distance
+        if (!L.Open(st.mask, st.minCode)) continue;
         if (!(max32[size_t(WrapFast(j + st.oy, H)) * size_t(W) +
                     size_t(WrapFast(i + st.ox, W))] > d))
             continue;
         for (int x = st.first; x < st.last; ++x) {
             const ExitTile& t = win.tiles[size_t(x)];
-            if (!(worst > t.openAbove)) break;  // sorted by distance
-            const SectorBits open = L.Open(t.mask, t.openAbove);
+            if (!(worst > t.minCode)) break;  // sorted by distance
+            const SectorBits open = L.Open(t.mask, t.minCode);
             if (!open) continue;
             const int wy = WrapFast(j + t.oy, H), wx = WrapFast(i + t.ox, W);
             if (!(max8[size_t(wy) * size_t(W) + size_t(wx)] > d)) continue;
@@ -490,10 +493,10 @@ inline void ExitScan(const DepthField& hf, const ExitWindow& win,
     }
 }
 
-/// ExitScan into L[0..kSectors), scalar.
+/// ExitScan into the codes L[0..kSectors), scalar.
 void ExitDistancesOfTexel(const DepthField& hf, const ExitWindow& win,
                           const std::vector<float>& max8, const std::vector<float>& max32,
-                          int i, int j, float d, float edge, float* L) {
+                          int i, int j, float d, float edge, uint8_t* L) {
     ScalarSectors sectors(edge);
     ExitScan(hf, win, max8, max32, i, j, d, edge, sectors);
     sectors.Store(L);
@@ -519,7 +522,7 @@ struct VectorSectors {
         for (int k = 0; cells; cells &= cells - 1, k = (k + 1) & 3) {
             const ExitOffset& off = offs[std::countr_zero(cells)];
             m[k] = _mm512_mask_min_ps(m[k], __mmask16(off.mask), m[k],
-                                      _mm512_set1_ps(off.dist));
+                                      _mm512_set1_ps(off.code));
         }
         const __m512 lowered =
             _mm512_min_ps(_mm512_min_ps(m[0], m[1]), _mm512_min_ps(m[2], m[3]));
@@ -528,14 +531,17 @@ struct VectorSectors {
         return changed;
     }
     RS_TARGET_AVX512 float Worst() const { return _mm512_reduce_max_ps(L); }
-    RS_TARGET_AVX512 void Store(float* out) const { _mm512_storeu_ps(out, L); }
+    RS_TARGET_AVX512 void Store(uint8_t* out) const {
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(out),
+                         _mm512_cvtepi32_epi8(_mm512_cvttps_epi32(L)));
+    }
 };
 
-/// ExitScan into L[0..kSectors), with AVX-512 (flatten: ExitScan and the methods it
-/// calls are compiled into it, for AVX-512).
+/// ExitScan into the codes L[0..kSectors), with AVX-512 (flatten: ExitScan and the
+/// methods it calls are compiled into it, for AVX-512).
 RS_TARGET_AVX512 __attribute__((flatten)) void ExitDistancesOfTexelAvx512(
     const DepthField& hf, const ExitWindow& win, const std::vector<float>& max8,
-    const std::vector<float>& max32, int i, int j, float d, float edge, float* L) {
+    const std::vector<float>& max32, int i, int j, float d, float edge, uint8_t* L) {
     VectorSectors sectors(edge);
     ExitScan(hf, win, max8, max32, i, j, d, edge, sectors);
     sectors.Store(L);
@@ -555,7 +561,7 @@ void ExitDistancesEveryCell(const DepthField& hf, const ExitWindow& win, int i, 
             const int x = WrapFast(i + t.ox + slot % kTile, W);
             const int y = WrapFast(j + t.oy + slot / kTile, H);
             if (o.mask && hf.depth[size_t(y) * size_t(W) + size_t(x)] > d)
-                LowerMasked(unsigned(o.mask), o.dist, L);
+                LowerMasked(unsigned(o.mask), win.dist[size_t(t.begin + slot)], L);
         }
 }
 
@@ -583,9 +589,11 @@ ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted
     const float edge = NonNegFloatAtMost(std::min((Rx + 0.5) / W, (Ry + 0.5) / H) - e);
     float dmax = hf.depth[0];
     for (float d : hf.depth) dmax = std::max(dmax, d);
-    // Coded as each texel is done (a float field would take 64 bytes per texel).
+    // The scan takes the codes themselves (SetCodes; a float field would take 64 bytes
+    // per texel); the oracle takes distances, coded as each texel is done.
     f.decode = ExitCodes(W, H, edge);
-    SetOpenBounds(win, f.decode);
+    SetCodes(win, f.decode);
+    const float edgeCode = float(EncodeDown(f.decode, edge));
     f.L.assign(N * kSectors, 255);
     tbb::parallel_for(
         tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
@@ -599,20 +607,21 @@ ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted
                     const float d = b + ListingStep(1.0f - b, steps, inv);
                     if (!(d < dmax))
                         continue;  // nothing is deeper: no cell can end a march
+                    uint8_t* out = &f.L[(size_t(j) * size_t(W) + size_t(i)) * kSectors];
                     if (how == ExitBuild::EveryCell) {
                         ExitDistancesEveryCell(hf, win, i, j, d, edge, L);
-                    } else {
-#if RS_HAVE_CONE_SEARCH_AVX
-                        if (how == ExitBuild::ScanAvx512)
-                            ExitDistancesOfTexelAvx512(hf, win, max8, max32, i, j, d,
-                                                       edge, L);
-                        else
-#endif
-                            ExitDistancesOfTexel(hf, win, max8, max32, i, j, d, edge, L);
+                        for (int k = 0; k < kSectors; ++k)
+                            out[k] = EncodeDown(f.decode, L[k]);
+                        continue;
                     }
-                    uint8_t* out = &f.L[(size_t(j) * size_t(W) + size_t(i)) * kSectors];
-                    for (int k = 0; k < kSectors; ++k)
-                        out[k] = EncodeDown(f.decode, L[k]);
+#if RS_HAVE_CONE_SEARCH_AVX
+                    if (how == ExitBuild::ScanAvx512) {
+                        ExitDistancesOfTexelAvx512(hf, win, max8, max32, i, j, d,
+                                                   edgeCode, out);
+                        continue;
+                    }
+#endif
+                    ExitDistancesOfTexel(hf, win, max8, max32, i, j, d, edgeCode, out);
                 }
         });
     // Window minima of L per sector, for offset tiles (8x8) and their quarters (4x4),
