@@ -831,6 +831,19 @@ struct DenseOffsets {
     static constexpr int kPadLo = kApexSide - 1;
     static constexpr int kPadHi = kSuperTile * kTile + kApexSide;
     int hx = 0, hy = 0, pitch = 0;
+    /// float(dx) / float(W) and float(dy) / float(H), the listing's destination offsets,
+    /// for |dx|, |dy| <= offsetPad (every offset of the table, from any lane of a tile):
+    /// the same floats without a division.
+    int offsetPad = 0;
+    std::vector<float> uOf, vOf;
+    float OffsetU(int dx) const {
+        RS_DCHECK(dx >= -offsetPad && dx <= offsetPad);
+        return uOf[size_t(dx + offsetPad)];
+    }
+    float OffsetV(int dy) const {
+        RS_DCHECK(dy >= -offsetPad && dy <= offsetPad);
+        return vOf[size_t(dy + offsetPad)];
+    }
     /// One record per offset (a lane's test reads one line), or, for the AVX-512 search
     /// (RelaxedTileSearch::SearchQuarterAvx512, which loads 4 adjacent offsets of a field
     /// at a time), the same fields in arrays of their own: one of the two is filled.
@@ -861,6 +874,11 @@ DenseOffsets MakeDenseOffsets(const Geometry& g, int W, int H, int steps, bool f
     const int rows = 2 * t.hy + 1 + DenseOffsets::kPadLo + DenseOffsets::kPadHi;
     const size_t n = size_t(t.pitch) * size_t(rows);
     const OffsetBounds none{kInfF, kInfF, 0.0f, 0.0f, 0};
+    t.offsetPad = std::max(t.hx, t.hy) + DenseOffsets::kPadHi + kApexSide;
+    for (int k = -t.offsetPad; k <= t.offsetPad; ++k) {
+        t.uOf.push_back(float(k) / float(W));
+        t.vOf.push_back(float(k) / float(H));
+    }
     if (fields) {
         t.soa.distLo.assign(n, none.distLo);
         t.soa.dist.assign(n, none.dist);
@@ -1354,11 +1372,6 @@ struct RelaxedTileSearch {
     /// AheadPrunes' travel a clear window of each level proves, and (AheadPrunesAvx512)
     /// the one the levels before it prove (-inf for the first).
     alignas(64) std::array<double, 8> provenAt{}, provenBefore{};
-    /// float(dx) / float(W) and float(dy) / float(H), the listing's destination offsets,
-    /// for |dx|, |dy| <= offsetPad (OffsetU, OffsetV): the same floats without a
-    /// division.
-    int offsetPad = 0;
-    std::vector<float> uOf, vOf;
     TileBest tb;
 
     RelaxedTileSearch(const DepthField& hf, const DenseOffsets& d, const LaneWindows& lw,
@@ -1368,12 +1381,7 @@ struct RelaxedTileSearch {
         for (int l = 0; l < kLanes; ++l)
             laneDelta[size_t(l)] =
                 size_t(l / kApexSide) * size_t(d.pitch) + size_t(l % kApexSide);
-        // Every offset of the dense table, from any lane of the tile.
-        offsetPad = std::max(d.hx, d.hy) + DenseOffsets::kPadHi + kApexSide;
-        for (int t = -offsetPad; t <= offsetPad; ++t) {
-            uOf.push_back(float(t) / float(hf.width));
-            vOf.push_back(float(t) / float(hf.height));
-        }
+        // Eight values: cheaper made here than shared.
         const double texel = std::min(1.0 / double(hf.width), 1.0 / double(hf.height));
         for (size_t level = 0; level < provenAt.size(); ++level) {
             provenAt[level] = (double(2 << level) - 0.5) * texel - 4.0 * ef.eps;
@@ -1381,14 +1389,8 @@ struct RelaxedTileSearch {
         }
     }
 
-    float OffsetU(int dx) const {
-        RS_DCHECK(dx >= -offsetPad && dx <= offsetPad);
-        return uOf[size_t(dx + offsetPad)];
-    }
-    float OffsetV(int dy) const {
-        RS_DCHECK(dy >= -offsetPad && dy <= offsetPad);
-        return vOf[size_t(dy + offsetPad)];
-    }
+    float OffsetU(int dx) const { return d.OffsetU(dx); }
+    float OffsetV(int dy) const { return d.OffsetV(dy); }
 
     /// The listing's ratio of lane l's pair at offset (dx, dy); lowers its minimum.
     RS_INLINE void Consider(int l, int dx, int dy, float b, double clear = 0) {
