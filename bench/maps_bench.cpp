@@ -17,6 +17,7 @@
 #include "bench/bench_maps.h"
 #include "maps/cone_map.h"
 #include "maps/cone_map_bilinear.h"
+#include "maps/cone_map_detail.h"
 #include "texture/procedural.h"
 
 namespace reliefsim {
@@ -68,19 +69,35 @@ void GenerateRelaxedScalar(benchmark::State& state,
         unsetenv("RS_CONE_SEARCH_ISA");
 }
 
+/// The relaxed map's exit field alone (docs/cone_maps.md, "Exit bound"), 128 steps, by
+/// the search's own build (AVX-512 where the relaxed search uses it).
+void BuildExitFieldOnce(benchmark::State& state,
+                        std::shared_ptr<const DepthField> field) {
+    for (auto _ : state)
+        benchmark::DoNotOptimize(detail::RelaxedExitField(*field, 128, true));
+    state.SetItemsProcessed(state.iterations() * int64_t(field->width) *
+                            int64_t(field->height));
+}
+
 /// One benchmark per map and kind, named BM_ConeMap/<map>/<kind>, and per kind with a
 /// bilinear-bound variant BM_ConeMapBilinear/<map>/<kind> (`--cone-bounds bilinear`);
 /// BM_RelaxedScalar/<map>: the relaxed map by the scalar search (the reporter prints
-/// its ratio to BM_ConeMap/<map>/relaxed when both ran). Each generation is one
-/// iteration (they take seconds).
+/// its ratio to BM_ConeMap/<map>/relaxed when both ran); BM_RelaxedExitField/<map>: its
+/// exit field alone. Each generation is one iteration (they take seconds).
 void RegisterMap(const std::string& name, std::shared_ptr<const DepthField> field,
                  bool conservativeOnly = false) {
-    if (!conservativeOnly)
+    if (!conservativeOnly) {
         benchmark::RegisterBenchmark(("BM_RelaxedScalar/" + name).c_str(),
                                      GenerateRelaxedScalar, field)
             ->Unit(benchmark::kMillisecond)
             ->UseRealTime()
             ->Iterations(1);
+        benchmark::RegisterBenchmark(("BM_RelaxedExitField/" + name).c_str(),
+                                     BuildExitFieldOnce, field)
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime()
+            ->Iterations(1);
+    }
     for (const NamedKind& k : kKinds) {
         if (conservativeOnly && k.kind != ConeKind::Cone) continue;
         benchmark::RegisterBenchmark(("BM_ConeMap/" + name + "/" + k.name).c_str(),
