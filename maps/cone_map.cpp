@@ -307,27 +307,33 @@ TiledOffsets MakeTiledOffsets(const Geometry& g, ConeKind sectors, bool cells) {
 template <class T, class Op>
 void WindowReduceInto(const std::vector<T>& v, int W, int H, int C, int k, int step,
                       Op op, std::vector<T>& rows, std::vector<T>& out) {
-    const size_t Cs = size_t(C);
-    // One separable pass: along x (dx = 1) or y (dx = 0), k samples `step` apart,
-    // wrapped.
+    const size_t rowLen = size_t(W) * size_t(C);
+    // One separable pass: along x or y, k samples `step` apart, wrapped. Whole rows at a
+    // time: along y, a row of the result is the op of k rows of the input; along x, of
+    // the input row and its k - 1 rotations (by step, 2 step, ... texels, in two
+    // pieces). Flat loops over W * C values (vectors for any C), each value taking its k
+    // samples in order, as one texel at a time would.
     auto pass = [&](const std::vector<T>& in, std::vector<T>& out, bool alongX) {
         tbb::parallel_for(
             tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
-                for (int j = r.begin(); j < r.end(); ++j)
-                    for (int i = 0; i < W; ++i) {
-                        // The texel's C channels side by side (one vector where C = 16).
-                        T* m = &out[(size_t(j) * size_t(W) + size_t(i)) * Cs];
-                        const T* first = &in[(size_t(j) * size_t(W) + size_t(i)) * Cs];
-                        for (size_t c = 0; c < Cs; ++c) m[c] = first[c];
-                        const int n = alongX ? W : H, p0 = alongX ? i : j;
-                        for (int a = 1, p = p0 + step; a < k; ++a, p += step) {
-                            if (p >= n)
-                                p = p - n < n ? p - n : Wrap(p, n);  // no modulo mostly
-                            const int x = alongX ? p : i, y = alongX ? j : p;
-                            const T* next = &in[(size_t(y) * size_t(W) + size_t(x)) * Cs];
-                            for (size_t c = 0; c < Cs; ++c) m[c] = op(m[c], next[c]);
+                for (int j = r.begin(); j < r.end(); ++j) {
+                    T* o = &out[size_t(j) * rowLen];
+                    const T* row = &in[size_t(j) * rowLen];
+                    std::copy(row, row + rowLen, o);
+                    for (int a = 1; a < k; ++a) {
+                        if (alongX) {
+                            // o[e] against row[(e + s) mod rowLen], s = the rotation.
+                            const size_t s = size_t(Wrap(a * step, W)) * size_t(C);
+                            const size_t n1 = rowLen - s;
+                            for (size_t e = 0; e < n1; ++e) o[e] = op(o[e], row[e + s]);
+                            for (size_t e = n1; e < rowLen; ++e)
+                                o[e] = op(o[e], row[e - n1]);
+                        } else {
+                            const T* next = &in[size_t(Wrap(j + a * step, H)) * rowLen];
+                            for (size_t e = 0; e < rowLen; ++e) o[e] = op(o[e], next[e]);
                         }
                     }
+                }
             });
     };
     rows.resize(v.size());
