@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/huge_pages.h"
 #include "core/param_name.h"
 #include "maps/cone_map_detail.h"
 
@@ -336,8 +337,8 @@ void WindowReduceInto(const std::vector<T>& v, int W, int H, int C, int k, int s
                 }
             });
     };
-    rows.resize(v.size());
-    out.resize(v.size());
+    ResizeOnHugePages(rows, v.size());
+    ResizeOnHugePages(out, v.size());
     pass(v, rows, true);
     pass(rows, out, false);
 }

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "core/error.h"
+#include "core/huge_pages.h"
 #include "maps/cone_map.h"
 #include "maps/cone_map_detail.h"
 #include "maps/cone_search.h"
@@ -594,7 +595,7 @@ ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted
     f.decode = ExitCodes(W, H, edge);
     SetCodes(win, f.decode);
     const float edgeCode = float(EncodeDown(f.decode, edge));
-    f.L.assign(N * kSectors, 255);
+    AssignOnHugePages(f.L, N * kSectors, uint8_t(255));
     tbb::parallel_for(
         tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
             float L[kSectors];
@@ -770,7 +771,7 @@ void MakeWindowsAhead(DepthWindows& dw, const std::vector<float>& depth, int W, 
     const size_t n = size_t(W) * size_t(H);
     std::array<std::vector<uint8_t>, AheadCodes::kLevels> codes;
     const auto code = [&](size_t level, const std::vector<float>& max) {
-        codes[level].resize(n);
+        ResizeOnHugePages(codes[level], n);
         tbb::parallel_for(tbb::blocked_range<size_t>(0, n),
                           [&](const tbb::blocked_range<size_t>& r) {
                               for (size_t t = r.begin(); t < r.end(); ++t)
@@ -789,7 +790,7 @@ void MakeWindowsAhead(DepthWindows& dw, const std::vector<float>& depth, int W, 
     }
     for (size_t q = 0; q < 4; ++q) {
         auto& ahead = dw.ahead[q];
-        ahead.resize(n);
+        ResizeOnHugePages(ahead, n);
         tbb::parallel_for(
             tbb::blocked_range<int>(0, H), [&](const tbb::blocked_range<int>& r) {
                 for (int y = r.begin(); y < r.end(); ++y)
@@ -880,13 +881,13 @@ DenseOffsets MakeDenseOffsets(const Geometry& g, int W, int H, int steps, bool f
         t.vOf.push_back(float(k) / float(H));
     }
     if (fields) {
-        t.soa.distLo.assign(n, none.distLo);
-        t.soa.dist.assign(n, none.dist);
-        t.soa.invD.assign(n, none.invD);
-        t.soa.stepK.assign(n, none.stepK);
-        t.soa.mask.assign(n, none.mask);
+        AssignOnHugePages(t.soa.distLo, n, none.distLo);
+        AssignOnHugePages(t.soa.dist, n, none.dist);
+        AssignOnHugePages(t.soa.invD, n, none.invD);
+        AssignOnHugePages(t.soa.stepK, n, none.stepK);
+        AssignOnHugePages(t.soa.mask, n, uint32_t(none.mask));
     } else {
-        t.at.assign(n, none);
+        AssignOnHugePages(t.at, n, none);
     }
     tbb::parallel_for(
         tbb::blocked_range<int>(-t.hy, t.hy + 1), [&](const tbb::blocked_range<int>& r) {
@@ -955,7 +956,7 @@ LaneWindows MakeLaneWindows(const DenseOffsets& d) {
     const int nty = nsy * kSuperTile;
     lw.nqx = 2 * lw.ntx;
     lw.nqy = 2 * nty;
-    lw.quarters.resize(size_t(lw.nqx) * size_t(lw.nqy));
+    ResizeOnHugePages(lw.quarters, size_t(lw.nqx) * size_t(lw.nqy));
     tbb::parallel_for(
         tbb::blocked_range<int>(0, lw.nqy), [&](const tbb::blocked_range<int>& r) {
             for (int qy = r.begin(); qy < r.end(); ++qy)
@@ -1946,7 +1947,7 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
     }
     dw.min4 = WindowMinima(hf.depth, W, H, 1, 4);
     MakeWindowsAhead(dw, hf.depth, W, H);
-    dw.shallow.assign(hf.depth.size(), 0.0f);
+    AssignOnHugePages(dw.shallow, hf.depth.size(), 0.0f);
     for (size_t t = 0; t < dw.shallow.size(); ++t) {
         const double b = double(hf.depth[t]);
         if (b > 0) dw.shallow[t] = NonNegFloatAtMost((1.0 - b) / b);
@@ -2002,7 +2003,8 @@ ConeMap RelaxedListingMap(const DepthField& hf, const ConeMapParams& p, bool bru
     out.m.width = hf.width;
     out.m.height = hf.height;
     out.m.channels = out.K;
-    out.m.values.assign(size_t(hf.width) * size_t(hf.height) * size_t(out.K), 0.0f);
+    AssignOnHugePages(out.m.values, size_t(hf.width) * size_t(hf.height) * size_t(out.K),
+                      0.0f);
     if (brute)
         BruteRelaxedMap(hf, p, g, out);
     else
