@@ -420,7 +420,7 @@ RS_INLINE SectorBits OpenSectors(const float* L, SectorBits mask, float v) {
 /// AVX-512 one keeps them in one register, VectorSectors).
 struct ScalarSectors {
     float L[kSectors];
-    explicit ScalarSectors(float edge) { std::fill(L, L + kSectors, edge); }
+    explicit ScalarSectors(float edgeCode) { std::fill(L, L + kSectors, edgeCode); }
     /// Sectors of `mask` whose code is above v.
     SectorBits Open(SectorBits mask, float v) const { return OpenSectors(L, mask, v); }
     /// The 8 cells row[0..8) deeper than d, one bit each.
@@ -447,15 +447,16 @@ struct ScalarSectors {
 
 /// The exit field of texel (i, j) into L (ScalarSectors or VectorSectors): per sector,
 /// the code of the distance to the nearest cell deeper than d (the march's z after its
-/// first step) in the window, `edge` (the window edge's code) when none is (SetCodes).
+/// first step) in the window, `edgeCode` (the window edge's code) when none is
+/// (SetCodes).
 /// max8, max32: depth maxima over the 8x8 and 32x32 windows (tiles and super-tiles
 /// without a deeper cell are skipped).
 template <class Sectors>
 inline void ExitScan(const DepthField& hf, const ExitWindow& win,
                      const std::vector<float>& max8, const std::vector<float>& max32,
-                     int i, int j, float d, float edge, Sectors& L) {
+                     int i, int j, float d, float edgeCode, Sectors& L) {
     const int W = hf.width, H = hf.height;
-    float worst = edge;
+    float worst = edgeCode;
     for (const ExitSuper& st : win.supers) {
         if (!(worst > st.minCode)) break;  // sorted by distance
         if (!L.Open(st.mask, st.minCode)) continue;
@@ -497,9 +498,9 @@ inline void ExitScan(const DepthField& hf, const ExitWindow& win,
 /// ExitScan into the codes L[0..kSectors), scalar.
 void ExitDistancesOfTexel(const DepthField& hf, const ExitWindow& win,
                           const std::vector<float>& max8, const std::vector<float>& max32,
-                          int i, int j, float d, float edge, uint8_t* L) {
-    ScalarSectors sectors(edge);
-    ExitScan(hf, win, max8, max32, i, j, d, edge, sectors);
+                          int i, int j, float d, float edgeCode, uint8_t* L) {
+    ScalarSectors sectors(edgeCode);
+    ExitScan(hf, win, max8, max32, i, j, d, edgeCode, sectors);
     sectors.Store(L);
 }
 
@@ -509,7 +510,8 @@ RS_AVX512_WARNINGS_OFF
 /// distances.
 struct VectorSectors {
     __m512 L;
-    RS_TARGET_AVX512 explicit VectorSectors(float edge) : L(_mm512_set1_ps(edge)) {}
+    RS_TARGET_AVX512 explicit VectorSectors(float edgeCode)
+        : L(_mm512_set1_ps(edgeCode)) {}
     RS_TARGET_AVX512 SectorBits Open(SectorBits mask, float v) const {
         return _mm512_mask_cmp_ps_mask(__mmask16(mask), L, _mm512_set1_ps(v), _CMP_GT_OQ);
     }
@@ -542,9 +544,9 @@ struct VectorSectors {
 /// methods it calls are compiled into it, for AVX-512).
 RS_TARGET_AVX512 __attribute__((flatten)) void ExitDistancesOfTexelAvx512(
     const DepthField& hf, const ExitWindow& win, const std::vector<float>& max8,
-    const std::vector<float>& max32, int i, int j, float d, float edge, uint8_t* L) {
-    VectorSectors sectors(edge);
-    ExitScan(hf, win, max8, max32, i, j, d, edge, sectors);
+    const std::vector<float>& max32, int i, int j, float d, float edgeCode, uint8_t* L) {
+    VectorSectors sectors(edgeCode);
+    ExitScan(hf, win, max8, max32, i, j, d, edgeCode, sectors);
     sectors.Store(L);
 }
 RS_AVX512_WARNINGS_ON
@@ -1806,9 +1808,8 @@ struct RelaxedTileSearch {
     /// waits for its gather). Four groups took 1-3% less time than two on rocks 8-bit
     /// at 1024² and `builtin:shapes:512`; refilling a group's finished lanes from the
     /// queue as they end took more (the start of a march costs more than idle lanes).
-    /// Every
-    /// pair is marched against its lane's minimum as it was before the batch (at least
-    /// the scalar search's then: an early out returns that minimum, which lowers
+    /// Every pair is marched against its lane's minimum as it was before the batch (at
+    /// least the scalar search's then: an early out returns that minimum, which lowers
     /// nothing); the minima are lowered in the batch's order.
     RS_TARGET_AVX512 void MarchBatchAvx512() {
         const int n = marches.n;
