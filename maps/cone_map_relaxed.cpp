@@ -505,6 +505,72 @@ void ExitDistancesOfTexel(const DepthField& hf, const ExitWindow& win,
 }
 
 #if RS_HAVE_CONE_SEARCH_AVX
+/// The exit field's AVX2 scan (where the lane search runs its AVX2 unit): compiled for
+/// it whatever the build's target, called only where the CPU has it.
+#define RS_TARGET_AVX2 __attribute__((target("avx2")))
+/// ScalarSectors in two AVX2 registers (sectors 0-7 and 8-15): the same comparisons and
+/// minima, so the same codes.
+struct Avx2Sectors {
+    __m256 lo, hi;
+    RS_TARGET_AVX2 explicit Avx2Sectors(float edgeCode)
+        : lo(_mm256_set1_ps(edgeCode)), hi(_mm256_set1_ps(edgeCode)) {}
+    /// The 8 lanes of `bits` (bit k: lane k) as a vector mask.
+    RS_TARGET_AVX2 static __m256 Lanes(unsigned bits) {
+        const __m256i one = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+        return _mm256_castsi256_ps(
+            _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(int(bits)), one), one));
+    }
+    RS_TARGET_AVX2 static unsigned Above(__m256 a, __m256 b) {
+        return unsigned(_mm256_movemask_ps(_mm256_cmp_ps(a, b, _CMP_GT_OQ)));
+    }
+    RS_TARGET_AVX2 SectorBits Open(SectorBits mask, float v) const {
+        const __m256 vv = _mm256_set1_ps(v);
+        return SectorBits((Above(lo, vv) | Above(hi, vv) << 8) & unsigned(mask));
+    }
+    RS_TARGET_AVX2 static unsigned Deeper(const float* row, float d) {
+        return Above(_mm256_loadu_ps(row), _mm256_set1_ps(d));
+    }
+    /// The cells in two running minima (independent chains), then their minimum.
+    RS_TARGET_AVX2 bool LowerCells(uint64_t cells, const ExitOffset* offs) {
+        __m256 l[2] = {lo, lo}, h[2] = {hi, hi};
+        for (int k = 0; cells; cells &= cells - 1, k ^= 1) {
+            const ExitOffset& off = offs[std::countr_zero(cells)];
+            const __m256 c = _mm256_set1_ps(off.code);
+            const unsigned m = unsigned(off.mask);
+            l[k] = _mm256_blendv_ps(l[k], _mm256_min_ps(l[k], c), Lanes(m & 0xFFu));
+            h[k] = _mm256_blendv_ps(h[k], _mm256_min_ps(h[k], c), Lanes(m >> 8));
+        }
+        const __m256 nl = _mm256_min_ps(l[0], l[1]), nh = _mm256_min_ps(h[0], h[1]);
+        const bool changed = (Above(lo, nl) | Above(hi, nh)) != 0;
+        lo = nl;
+        hi = nh;
+        return changed;
+    }
+    RS_TARGET_AVX2 float Worst() const {
+        __m256 m = _mm256_max_ps(lo, hi);
+        m = _mm256_max_ps(m, _mm256_permute2f128_ps(m, m, 1));
+        m = _mm256_max_ps(m, _mm256_shuffle_ps(m, m, _MM_SHUFFLE(1, 0, 3, 2)));
+        m = _mm256_max_ps(m, _mm256_shuffle_ps(m, m, _MM_SHUFFLE(2, 3, 0, 1)));
+        return _mm256_cvtss_f32(m);
+    }
+    RS_TARGET_AVX2 void Store(uint8_t* out) const {
+        alignas(32) float v[kSectors];
+        _mm256_store_ps(v, lo);
+        _mm256_store_ps(v + 8, hi);
+        for (int k = 0; k < kSectors; ++k) out[k] = uint8_t(v[k]);
+    }
+};
+
+/// ExitScan into the codes L[0..kSectors), with AVX2 (flatten: ExitScan and the methods
+/// it calls are compiled into it, for AVX2).
+RS_TARGET_AVX2 __attribute__((flatten)) void ExitDistancesOfTexelAvx2(
+    const DepthField& hf, const ExitWindow& win, const std::vector<float>& max8,
+    const std::vector<float>& max32, int i, int j, float d, float edgeCode, uint8_t* L) {
+    Avx2Sectors sectors(edgeCode);
+    ExitScan(hf, win, max8, max32, i, j, d, edgeCode, sectors);
+    sectors.Store(L);
+}
+
 RS_AVX512_WARNINGS_OFF
 /// ScalarSectors in one AVX-512 register: the same comparisons and minima, so the same
 /// distances.
@@ -568,9 +634,18 @@ void ExitDistancesEveryCell(const DepthField& hf, const ExitWindow& win, int i, 
         }
 }
 
-/// How BuildExitField takes a texel's distances: ExitScan (scalar or AVX-512), or every
-/// cell of the window (ExitDistancesEveryCell, the tests' oracle).
-enum class ExitBuild { Scan, ScanAvx512, EveryCell };
+/// How BuildExitField takes a texel's distances: ExitScan (scalar, AVX2 or AVX-512), or
+/// every cell of the window (ExitDistancesEveryCell, the tests' oracle).
+enum class ExitBuild { Scan, ScanAvx2, ScanAvx512, EveryCell };
+
+/// The exit field's scan for the unit the lane search runs (ConeSearchIsa): AVX-512,
+/// AVX2 or scalar; the same codes.
+ExitBuild ExitScanBuild() {
+    const std::string_view isa = ConeSearchIsa();
+    if (kAvx512Search && isa == "avx512") return ExitBuild::ScanAvx512;
+    if (kAvx512Search && isa == "avx2") return ExitBuild::ScanAvx2;
+    return ExitBuild::Scan;
+}
 
 /// The exit field (ExitField) of a map for `steps` steps; empty (usable = false) when
 /// its float argument does not hold or it is not wanted. max8, max32: the map's depth
@@ -624,6 +699,11 @@ ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted
                     if (how == ExitBuild::ScanAvx512) {
                         ExitDistancesOfTexelAvx512(hf, win, max8, max32, i, j, d,
                                                    edgeCode, out);
+                        continue;
+                    }
+                    if (how == ExitBuild::ScanAvx2) {
+                        ExitDistancesOfTexelAvx2(hf, win, max8, max32, i, j, d, edgeCode,
+                                                 out);
                         continue;
                     }
 #endif
@@ -1937,12 +2017,12 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
     // The exit field before the offsets and the other windows: its build's scratch is
     // freed before they are made (peak memory at 2048²).
     const float inv = PowerOfTwoInverse(p.searchSteps);
-    // The exit field's build and the search's bounds with AVX-512 where the lane search
-    // uses it (RS_CONE_SEARCH_ISA forces a unit; the tests compare them).
+    // The exit field's build with AVX-512 or AVX2, and the search's bounds with AVX-512,
+    // where the lane search uses that unit (RS_CONE_SEARCH_ISA forces a unit; the tests
+    // compare them).
     const bool avx512 = kAvx512Search && std::string_view(ConeSearchIsa()) == "avx512";
-    const ExitField ef =
-        BuildExitField(hf, p.searchSteps, inv, exitField, dw.max8, dw.max32,
-                       avx512 ? ExitBuild::ScanAvx512 : ExitBuild::Scan);
+    const ExitField ef = BuildExitField(hf, p.searchSteps, inv, exitField, dw.max8,
+                                        dw.max32, ExitScanBuild());
     {
         SearchWindows sw;  // depth minima over 8x8 and 32x32 windows (the tiled search's)
         MakeSearchWindows(hf, sw);
@@ -2021,10 +2101,7 @@ std::vector<uint8_t> RelaxedExitField(const DepthField& hf, int steps, bool scan
     const std::vector<float> max8 =
         WindowMaxima(WindowMaxima(hf.depth, W, H, 4), W, H, 2, 4);
     const std::vector<float> max32 = WindowMaxima(max8, W, H, kSuperTile, kTile);
-    const bool avx512 = kAvx512Search && std::string_view(ConeSearchIsa()) == "avx512";
-    const ExitBuild how = !scan    ? ExitBuild::EveryCell
-                          : avx512 ? ExitBuild::ScanAvx512
-                                   : ExitBuild::Scan;
+    const ExitBuild how = scan ? ExitScanBuild() : ExitBuild::EveryCell;
     ExitField f =
         BuildExitField(hf, steps, PowerOfTwoInverse(steps), true, max8, max32, how);
     return std::move(f.L);

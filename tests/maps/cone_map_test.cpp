@@ -563,7 +563,7 @@ TEST(ConeMap, RelaxedExitFieldScanEqualsEveryCell) {
     // The exit field's scan visits super-tiles and tiles in order of distance and skips
     // those whose depth maxima hold no deeper cell, and sectors whose code no cell of the
     // tile can lower; taking every cell of the window, in no order, gives the same codes,
-    // scalar and AVX-512: float, 8-bit and random depths, zero depths, a plateau,
+    // scalar, AVX2 and AVX-512: float, 8-bit and random depths, zero depths, a plateau,
     // non-square maps, maps larger than a super-tile's window and maps smaller than the
     // window (wrapping more than once), steps that divide (37) and powers of two.
     const char* old = std::getenv("RS_CONE_SEARCH_ISA");
@@ -590,7 +590,7 @@ TEST(ConeMap, RelaxedExitFieldScanEqualsEveryCell) {
         size_t found = 0;
         for (uint8_t c : every) found += c > 0 && c < 254 ? 1 : 0;
         EXPECT_GT(found, 0u) << what;
-        for (const char* isa : {"sse4.1", "avx512"}) {
+        for (const char* isa : {"sse4.1", "avx2", "avx512"}) {
             setenv("RS_CONE_SEARCH_ISA", isa, 1);
             if (std::string(detail::ConeSearchIsa()) != isa) continue;  // CPU lacks it
             ++compared;
