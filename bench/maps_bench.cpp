@@ -12,12 +12,14 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "bench/bench_maps.h"
 #include "maps/cone_map.h"
 #include "maps/cone_map_bilinear.h"
 #include "maps/cone_map_detail.h"
+#include "maps/cone_search.h"
 #include "texture/procedural.h"
 
 namespace reliefsim {
@@ -54,15 +56,19 @@ void GenerateBilinearOnce(benchmark::State& state,
                             int64_t(field->height));
 }
 
-/// The relaxed map by the scalar search (RS_CONE_SEARCH_ISA=sse4.1 for the run; the
-/// default picks the AVX-512 search where the CPU has it: docs/cone_maps.md, "With
-/// AVX-512"). The same map.
-void GenerateRelaxedScalar(benchmark::State& state,
-                           std::shared_ptr<const DepthField> field) {
+/// The relaxed map with the lane search's unit forced to `isa` for the run: "sse4.1",
+/// the scalar search; "avx2", the scalar search with the AVX2 exit field, as a CPU
+/// without AVX-512 runs it (the default picks the AVX-512 search where the CPU has it:
+/// docs/cone_maps.md, "With AVX-512"). The same map.
+void GenerateRelaxedIsa(benchmark::State& state, std::shared_ptr<const DepthField> field,
+                        const char* isa) {
     const char* old = std::getenv("RS_CONE_SEARCH_ISA");
     const std::string saved = old ? old : "";
-    setenv("RS_CONE_SEARCH_ISA", "sse4.1", 1);
-    GenerateOnce(state, field, ConeKind::Relaxed);
+    setenv("RS_CONE_SEARCH_ISA", isa, 1);
+    if (std::string_view(detail::ConeSearchIsa()) != isa)
+        state.SkipWithError("the CPU lacks this unit");
+    else
+        GenerateOnce(state, field, ConeKind::Relaxed);
     if (old)
         setenv("RS_CONE_SEARCH_ISA", saved.c_str(), 1);
     else
@@ -70,7 +76,7 @@ void GenerateRelaxedScalar(benchmark::State& state,
 }
 
 /// The relaxed map's exit field alone (docs/cone_maps.md, "Exit bound"), 128 steps, by
-/// the search's own build (AVX-512 where the relaxed search uses it).
+/// the search's own build (AVX-512 or AVX2 as ConeSearchIsa() says).
 void BuildExitFieldOnce(benchmark::State& state,
                         std::shared_ptr<const DepthField> field) {
     for (auto _ : state)
@@ -82,13 +88,19 @@ void BuildExitFieldOnce(benchmark::State& state,
 /// One benchmark per map and kind, named BM_ConeMap/<map>/<kind>, and per kind with a
 /// bilinear-bound variant BM_ConeMapBilinear/<map>/<kind> (`--cone-bounds bilinear`);
 /// BM_RelaxedScalar/<map>: the relaxed map by the scalar search (the reporter prints
-/// its ratio to BM_ConeMap/<map>/relaxed when both ran); BM_RelaxedExitField/<map>: its
-/// exit field alone. Each generation is one iteration (they take seconds).
+/// its ratio to BM_ConeMap/<map>/relaxed when both ran); BM_RelaxedAvx2/<map>: as a CPU
+/// without AVX-512 makes it (skipped without AVX2); BM_RelaxedExitField/<map>: its exit
+/// field alone. Each generation is one iteration (they take seconds).
 void RegisterMap(const std::string& name, std::shared_ptr<const DepthField> field,
                  bool conservativeOnly = false) {
     if (!conservativeOnly) {
         benchmark::RegisterBenchmark(("BM_RelaxedScalar/" + name).c_str(),
-                                     GenerateRelaxedScalar, field)
+                                     GenerateRelaxedIsa, field, "sse4.1")
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime()
+            ->Iterations(1);
+        benchmark::RegisterBenchmark(("BM_RelaxedAvx2/" + name).c_str(),
+                                     GenerateRelaxedIsa, field, "avx2")
             ->Unit(benchmark::kMillisecond)
             ->UseRealTime()
             ->Iterations(1);

@@ -273,7 +273,7 @@ ConeMap RelaxedListingMap(const DepthField& hf, const ConeMapParams& p, bool bru
 
 /// The relaxed search's exit field for `steps` steps (docs/cone_maps.md, "Exit bound"):
 /// 16 sector codes per texel (0 is 0, 255 is +inf); empty where the search runs without
-/// it. scan: built as the search builds it (AVX-512 where ConeSearchIsa() is "avx512");
+/// it. scan: built as the search builds it (AVX-512 or AVX2 as ConeSearchIsa() says);
 /// otherwise from every cell of the window, with no skipping (the scan's oracle).
 std::vector<uint8_t> RelaxedExitField(const DepthField& hf, int steps, bool scan);
 
