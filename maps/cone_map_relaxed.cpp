@@ -641,9 +641,11 @@ enum class ExitBuild { Scan, ScanAvx2, ScanAvx512, EveryCell };
 /// The exit field's scan for the unit the lane search runs (ConeSearchIsa): AVX-512,
 /// AVX2 or scalar; the same codes.
 ExitBuild ExitScanBuild() {
+#if RS_HAVE_CONE_SEARCH_AVX
     const std::string_view isa = ConeSearchIsa();
-    if (kAvx512Search && isa == "avx512") return ExitBuild::ScanAvx512;
-    if (kAvx512Search && isa == "avx2") return ExitBuild::ScanAvx2;
+    if (isa == "avx512") return ExitBuild::ScanAvx512;
+    if (isa == "avx2") return ExitBuild::ScanAvx2;
+#endif
     return ExitBuild::Scan;
 }
 
