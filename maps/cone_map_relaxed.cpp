@@ -445,18 +445,27 @@ struct ScalarSectors {
     }
 };
 
-/// The exit field of texel (i, j) into L (ScalarSectors or VectorSectors): per sector,
-/// the code of the distance to the nearest cell deeper than d (the march's z after its
-/// first step) in the window, `edgeCode` (the window edge's code) when none is
-/// (SetCodes).
-/// max8, max32: depth maxima over the 8x8 and 32x32 windows (tiles and super-tiles
-/// without a deeper cell are skipped).
+/// What ExitScan reads: the map, the window, the depth maxima over the 8x8 and 32x32
+/// windows (tiles and super-tiles without a deeper cell are skipped) and the window
+/// edge's code (SetCodes).
+struct ExitScanInputs {
+    const DepthField& hf;
+    const ExitWindow& win;
+    const std::vector<float>& max8;
+    const std::vector<float>& max32;
+    float edgeCode;
+};
+
+/// The exit field of texel (i, j) into L (ScalarSectors, Avx2Sectors or VectorSectors):
+/// per sector, the code of the distance to the nearest cell deeper than d (the march's z
+/// after its first step) in the window, the window edge's code when none is.
 template <class Sectors>
-inline void ExitScan(const DepthField& hf, const ExitWindow& win,
-                     const std::vector<float>& max8, const std::vector<float>& max32,
-                     int i, int j, float d, float edgeCode, Sectors& L) {
+inline void ExitScan(const ExitScanInputs& in, int i, int j, float d, Sectors& L) {
+    const DepthField& hf = in.hf;
+    const ExitWindow& win = in.win;
+    const std::vector<float>&max8 = in.max8, &max32 = in.max32;
     const int W = hf.width, H = hf.height;
-    float worst = edgeCode;
+    float worst = in.edgeCode;
     for (const ExitSuper& st : win.supers) {
         if (!(worst > st.minCode)) break;  // sorted by distance
         if (!L.Open(st.mask, st.minCode)) continue;
@@ -495,13 +504,13 @@ inline void ExitScan(const DepthField& hf, const ExitWindow& win,
     }
 }
 
-/// ExitScan into the codes L[0..kSectors), scalar.
-void ExitDistancesOfTexel(const DepthField& hf, const ExitWindow& win,
-                          const std::vector<float>& max8, const std::vector<float>& max32,
-                          int i, int j, float d, float edgeCode, uint8_t* L) {
-    ScalarSectors sectors(edgeCode);
-    ExitScan(hf, win, max8, max32, i, j, d, edgeCode, sectors);
-    sectors.Store(L);
+/// ExitScan of texel (i, j) into the codes out[0..kSectors), in Sectors' registers.
+template <class Sectors>
+inline void ExitCodesOfTexel(const ExitScanInputs& in, int i, int j, float d,
+                             uint8_t* out) {
+    Sectors sectors(in.edgeCode);
+    ExitScan(in, i, j, d, sectors);
+    sectors.Store(out);
 }
 
 #if RS_HAVE_CONE_SEARCH_AVX
@@ -561,14 +570,11 @@ struct Avx2Sectors {
     }
 };
 
-/// ExitScan into the codes L[0..kSectors), with AVX2 (flatten: ExitScan and the methods
-/// it calls are compiled into it, for AVX2).
-RS_TARGET_AVX2 __attribute__((flatten)) void ExitDistancesOfTexelAvx2(
-    const DepthField& hf, const ExitWindow& win, const std::vector<float>& max8,
-    const std::vector<float>& max32, int i, int j, float d, float edgeCode, uint8_t* L) {
-    Avx2Sectors sectors(edgeCode);
-    ExitScan(hf, win, max8, max32, i, j, d, edgeCode, sectors);
-    sectors.Store(L);
+/// ExitCodesOfTexel with AVX2 (flatten: ExitScan and the methods it calls are compiled
+/// into it, for AVX2).
+RS_TARGET_AVX2 __attribute__((flatten)) void ExitCodesOfTexelAvx2(
+    const ExitScanInputs& in, int i, int j, float d, uint8_t* out) {
+    ExitCodesOfTexel<Avx2Sectors>(in, i, j, d, out);
 }
 
 RS_AVX512_WARNINGS_OFF
@@ -606,14 +612,11 @@ struct VectorSectors {
     }
 };
 
-/// ExitScan into the codes L[0..kSectors), with AVX-512 (flatten: ExitScan and the
-/// methods it calls are compiled into it, for AVX-512).
-RS_TARGET_AVX512 __attribute__((flatten)) void ExitDistancesOfTexelAvx512(
-    const DepthField& hf, const ExitWindow& win, const std::vector<float>& max8,
-    const std::vector<float>& max32, int i, int j, float d, float edgeCode, uint8_t* L) {
-    VectorSectors sectors(edgeCode);
-    ExitScan(hf, win, max8, max32, i, j, d, edgeCode, sectors);
-    sectors.Store(L);
+/// ExitCodesOfTexel with AVX-512 (flatten: ExitScan and the methods it calls are
+/// compiled into it, for AVX-512).
+RS_TARGET_AVX512 __attribute__((flatten)) void ExitCodesOfTexelAvx512(
+    const ExitScanInputs& in, int i, int j, float d, uint8_t* out) {
+    ExitCodesOfTexel<VectorSectors>(in, i, j, d, out);
 }
 RS_AVX512_WARNINGS_ON
 #endif
@@ -678,6 +681,7 @@ ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted
     SetCodes(win, f.decode);
     const float edgeCode = float(EncodeDown(f.decode, edge));
     AssignOnHugePages(f.L, N * kSectors, uint8_t(255));
+    const ExitScanInputs in{hf, win, max8, max32, edgeCode};
     tbb::parallel_for(
         tbb::blocked_range<int>(0, H, 1), [&](const tbb::blocked_range<int>& r) {
             float L[kSectors];
@@ -699,17 +703,15 @@ ExitField BuildExitField(const DepthField& hf, int steps, float inv, bool wanted
                     }
 #if RS_HAVE_CONE_SEARCH_AVX
                     if (how == ExitBuild::ScanAvx512) {
-                        ExitDistancesOfTexelAvx512(hf, win, max8, max32, i, j, d,
-                                                   edgeCode, out);
+                        ExitCodesOfTexelAvx512(in, i, j, d, out);
                         continue;
                     }
                     if (how == ExitBuild::ScanAvx2) {
-                        ExitDistancesOfTexelAvx2(hf, win, max8, max32, i, j, d, edgeCode,
-                                                 out);
+                        ExitCodesOfTexelAvx2(in, i, j, d, out);
                         continue;
                     }
 #endif
-                    ExitDistancesOfTexel(hf, win, max8, max32, i, j, d, edgeCode, out);
+                    ExitCodesOfTexel<ScalarSectors>(in, i, j, d, out);
                 }
         });
     // Window minima of L per sector, for offset tiles (8x8) and their quarters (4x4),
