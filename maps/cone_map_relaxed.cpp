@@ -57,16 +57,6 @@
 #endif
 
 namespace reliefsim::detail {
-namespace {
-#if RS_HAVE_CONE_SEARCH_AVX
-constexpr bool kAvx512Search = true;
-#else
-constexpr bool kAvx512Search = false;
-#endif
-}  // namespace
-}  // namespace reliefsim::detail
-
-namespace reliefsim::detail {
 
 namespace {
 
@@ -2024,9 +2014,10 @@ void PrunedRelaxedMap(const DepthField& hf, const ConeMapParams& p, const Geomet
     // The exit field's build with AVX-512 or AVX2, and the search's bounds with AVX-512,
     // where the lane search uses that unit (RS_CONE_SEARCH_ISA forces a unit; the tests
     // compare them).
-    const bool avx512 = kAvx512Search && std::string_view(ConeSearchIsa()) == "avx512";
-    const ExitField ef = BuildExitField(hf, p.searchSteps, inv, exitField, dw.max8,
-                                        dw.max32, ExitScanBuild());
+    const ExitBuild unit = ExitScanBuild();
+    const bool avx512 = unit == ExitBuild::ScanAvx512;
+    const ExitField ef =
+        BuildExitField(hf, p.searchSteps, inv, exitField, dw.max8, dw.max32, unit);
     {
         SearchWindows sw;  // depth minima over 8x8 and 32x32 windows (the tiled search's)
         MakeSearchWindows(hf, sw);
